@@ -1,0 +1,427 @@
+//! The map: two fixed tables (occupancy blocks, NDT voxels), queries and eviction.
+
+use crate::block::Block;
+use crate::config::{Config, LOGODDS_ONE};
+use crate::key::VoxelKey;
+use crate::table::{Entry, Table};
+use crate::voxel::{Gaussian, Voxel};
+
+/// Bytes of one occupancy block (64 voxels) in the block table, hash index included.
+pub const BLOCK_BYTES: usize = core::mem::size_of::<Block>();
+
+/// Bytes of the map besides its two tables (config, counters, table bookkeeping).
+pub const MAP_HEADER_BYTES: usize = 124;
+
+/// Occupancy state of a voxel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Occupancy {
+    /// Never observed (or log-odds exactly 0).
+    Unknown,
+    /// Log-odds below 0.
+    Free,
+    /// Log-odds above 0.
+    Occupied,
+}
+
+/// Totals since the map was created or cleared.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct MapStats {
+    /// Frames integrated.
+    pub frames: u32,
+    /// NDT voxels evicted to make room.
+    pub voxels_evicted: u64,
+    /// Occupancy blocks evicted to make room.
+    pub blocks_evicted: u64,
+    /// Point updates dropped because nothing could be evicted.
+    pub dropped_points: u64,
+    /// Free-space updates dropped because nothing could be evicted.
+    pub dropped_misses: u64,
+}
+
+/// Everything the map knows about one surface voxel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VoxelView<'a, const C: usize> {
+    /// The voxel's key.
+    pub key: VoxelKey,
+    /// Occupancy log-odds (natural units).
+    pub log_odds: f32,
+    /// Mean, covariance, count.
+    pub gaussian: Gaussian,
+    /// Class votes; bin `i` is class `i + 1`.
+    pub histogram: &'a [u8; C],
+}
+
+impl<const C: usize> VoxelView<'_, C> {
+    /// Most voted class (1-based) and its share of votes.
+    ///
+    /// ```
+    /// # use sndt_core::*;
+    /// let mut map: Map<16, 4, 3> = Map::new(Config::DEFAULT);
+    /// let p = [LabeledPoint::new(Point3::new(0.0, 0.0, 1.0), Labels::top1(2)); 3];
+    /// map.integrate(&Isometry3::identity(), &p).unwrap();
+    /// let v = map.voxels().next().unwrap();
+    /// assert_eq!(v.class(), Some((2, 1.0)));
+    /// ```
+    pub fn class(&self) -> Option<(u8, f32)> {
+        argmax(self.histogram)
+    }
+
+    /// Occupancy state.
+    pub fn occupancy(&self) -> Occupancy {
+        state(self.log_odds)
+    }
+}
+
+pub(crate) fn argmax(hist: &[u8]) -> Option<(u8, f32)> {
+    let mut best = 0usize;
+    let mut total = 0u32;
+    for (i, &b) in hist.iter().enumerate() {
+        total += b as u32;
+        if b > hist[best] {
+            best = i;
+        }
+    }
+    if total == 0 {
+        None
+    } else {
+        Some((best as u8 + 1, hist[best] as f32 / total as f32))
+    }
+}
+
+fn state(l: f32) -> Occupancy {
+    if l > 0.0 {
+        Occupancy::Occupied
+    } else if l < 0.0 {
+        Occupancy::Free
+    } else {
+        Occupancy::Unknown
+    }
+}
+
+/// A semantic occupancy-NDT map with room for `VOXELS` surface voxels, `BLOCKS` occupancy
+/// blocks of 4x4x4 voxels and `CLASSES` semantic classes (ids `1..=CLASSES`).
+///
+/// Its size is its whole memory: [`Map::BYTES`] `== size_of::<Map<V, B, C>>()`.
+///
+/// ```
+/// use sndt_core::{Config, Map};
+/// type RobotMap = Map<4096, 1024, 40>;
+/// let map = RobotMap::new(Config::DEFAULT);
+/// assert_eq!(core::mem::size_of::<RobotMap>(), RobotMap::BYTES);
+/// assert_eq!(RobotMap::VOXEL_BYTES, 96); // per NDT voxel with 40 classes, index included
+/// assert!(map.is_empty());
+/// ```
+pub struct Map<const VOXELS: usize, const BLOCKS: usize, const CLASSES: usize> {
+    pub(crate) config: Config,
+    pub(crate) voxels: Table<Voxel<CLASSES>, VOXELS>,
+    pub(crate) blocks: Table<Block, BLOCKS>,
+    pub(crate) stats: MapStats,
+}
+
+impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
+    /// Bytes per NDT voxel, hash index included: `round_up(54 + C, 4)` (96 for 40 classes).
+    pub const VOXEL_BYTES: usize = core::mem::size_of::<Voxel<C>>();
+
+    /// Exact size of the map:
+    /// `round_up(MAP_HEADER_BYTES + V * VOXEL_BYTES + B * BLOCK_BYTES, 8)`.
+    pub const BYTES: usize =
+        (MAP_HEADER_BYTES + V * Self::VOXEL_BYTES + B * BLOCK_BYTES).div_ceil(8) * 8;
+
+    /// An empty map. Invalid configs are replaced by [`Config::DEFAULT`]; use
+    /// [`Map::try_new`] to get an error instead.
+    pub const fn new(config: Config) -> Self {
+        const {
+            assert!(C >= 1 && C <= 254, "CLASSES must be in 1..=254");
+            assert!(V >= 1 && B >= 1, "capacities must be at least 1");
+        };
+        Map {
+            config,
+            voxels: Table::new(),
+            blocks: Table::new(),
+            stats: MapStats {
+                frames: 0,
+                voxels_evicted: 0,
+                blocks_evicted: 0,
+                dropped_points: 0,
+                dropped_misses: 0,
+            },
+        }
+        .checked()
+    }
+
+    const fn checked(mut self) -> Self {
+        // `Config::validate` is not const; check the fields that would break invariants.
+        let c = &self.config;
+        let bad = !(c.quant_bits >= 1
+            && c.quant_bits <= Config::MAX_QUANT_BITS
+            && c.n_min >= 2
+            && c.n_max >= c.n_min
+            && c.n_max <= 65535
+            && c.top_k >= 1
+            && c.top_k as usize <= crate::MAX_TOP_K
+            && c.cell_size > 0.0
+            && c.cell_size <= 100.0);
+        if bad {
+            self.config = Config::DEFAULT;
+        }
+        self
+    }
+
+    /// An empty map, or [`crate::Error::InvalidConfig`].
+    ///
+    /// ```
+    /// let mut c = sndt_core::Config::DEFAULT;
+    /// c.n_max = 1;
+    /// assert!(sndt_core::Map::<8, 8, 2>::try_new(c).is_err());
+    /// ```
+    pub fn try_new(config: Config) -> Result<Self, crate::Error> {
+        config.validate()?;
+        Ok(Self::new(config))
+    }
+
+    /// Empties the map in place and installs `config` (no large value on the stack).
+    ///
+    /// ```
+    /// # use sndt_core::*;
+    /// let mut map: Map<16, 4, 2> = Map::new(Config::DEFAULT);
+    /// map.reset(Config::with_cell_size(0.2)).unwrap();
+    /// assert_eq!(map.config().cell_size, 0.2);
+    /// ```
+    pub fn reset(&mut self, config: Config) -> Result<(), crate::Error> {
+        config.validate()?;
+        self.config = config;
+        self.voxels.clear();
+        self.blocks.clear();
+        self.stats = MapStats::default();
+        Ok(())
+    }
+
+    /// The map's configuration.
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// Totals since creation.
+    pub fn stats(&self) -> MapStats {
+        self.stats
+    }
+
+    /// Number of NDT (surface) voxels.
+    pub fn len(&self) -> usize {
+        self.voxels.len()
+    }
+
+    /// True when no voxel has been observed.
+    pub fn is_empty(&self) -> bool {
+        self.blocks.len() == 0
+    }
+
+    /// Number of occupancy blocks (each covers 4x4x4 voxels).
+    pub fn block_count(&self) -> usize {
+        self.blocks.len()
+    }
+
+    /// Key of the voxel containing a world point, if inside the key range.
+    pub fn voxel_key(&self, p: &[f32; 3]) -> Option<VoxelKey> {
+        VoxelKey::from_point(p, self.config.cell_size)
+    }
+
+    /// Occupancy log-odds of a voxel (natural units); 0 when unknown.
+    pub fn log_odds(&self, key: &VoxelKey) -> f32 {
+        match self.blocks.find(key.block()) {
+            Some(b) => self.blocks.slots[b].cells[key.cell() as usize] as f32 / LOGODDS_ONE,
+            None => 0.0,
+        }
+    }
+
+    /// Occupancy state of a voxel.
+    pub fn occupancy(&self, key: &VoxelKey) -> Occupancy {
+        state(self.log_odds(key))
+    }
+
+    /// Most voted class (1-based) and its share of the votes, for a surface voxel.
+    pub fn class(&self, key: &VoxelKey) -> Option<(u8, f32)> {
+        let v = self.voxels.find(key.packed())?;
+        argmax(&self.voxels.slots[v].hist)
+    }
+
+    /// The Gaussian of a surface voxel (any count; check `count` against `n_min`).
+    pub fn gaussian(&self, key: &VoxelKey) -> Option<Gaussian> {
+        let v = self.voxels.find(key.packed())?;
+        Some(self.voxels.slots[v].gaussian(self.config.cell_size, self.config.quant_step()))
+    }
+
+    /// The Gaussian of the surface voxel containing a world point.
+    pub fn gaussian_at(&self, p: &[f32; 3]) -> Option<Gaussian> {
+        self.gaussian(&self.voxel_key(p)?)
+    }
+
+    /// Everything about one surface voxel.
+    pub fn voxel(&self, key: &VoxelKey) -> Option<VoxelView<'_, C>> {
+        let v = self.voxels.find(key.packed())?;
+        Some(self.view(v))
+    }
+
+    fn view(&self, slot: usize) -> VoxelView<'_, C> {
+        let v = &self.voxels.slots[slot];
+        let key = v.voxel_key();
+        VoxelView {
+            key,
+            log_odds: self.log_odds(&key),
+            gaussian: v.gaussian(self.config.cell_size, self.config.quant_step()),
+            histogram: &v.hist,
+        }
+    }
+
+    /// All surface voxels in canonical order (independent of insertion order).
+    pub fn voxels(&self) -> impl Iterator<Item = VoxelView<'_, C>> + '_ {
+        self.voxels.canonical().map(move |s| self.view(s))
+    }
+
+    /// Every observed voxel (free or occupied) with its log-odds, block by block.
+    ///
+    /// ```
+    /// # use sndt_core::*;
+    /// let mut map: Map<16, 64, 2> = Map::new(Config::DEFAULT);
+    /// let p = [LabeledPoint::new(Point3::new(0.0, 0.0, 1.0), Labels::top1(1))];
+    /// map.integrate(&Isometry3::identity(), &p).unwrap();
+    /// let free = map.cells().filter(|(_, l)| *l < 0.0).count();
+    /// assert_eq!(free, 10); // the voxels from the sensor to the hit
+    /// ```
+    pub fn cells(&self) -> impl Iterator<Item = (VoxelKey, f32)> + '_ {
+        self.blocks.canonical().flat_map(move |b| {
+            let block = &self.blocks.slots[b];
+            let packed = block.packed_key();
+            block
+                .cells
+                .iter()
+                .enumerate()
+                .filter(|(_, &l)| l != 0)
+                .map(move |(i, &l)| {
+                    (
+                        VoxelKey::from_block_cell(packed, i as u32),
+                        l as f32 / LOGODDS_ONE,
+                    )
+                })
+        })
+    }
+
+    /// Evicts occupancy blocks (with their NDT voxels) farthest from `center`, not touched
+    /// in frame `stamp`. Returns how many blocks went.
+    pub(crate) fn evict_blocks(&mut self, center: &VoxelKey, stamp: u16) -> u32 {
+        let c = center.block();
+        let dist = |b: &Block| block_distance(b.packed_key(), c);
+        let mut hist = [0u32; BINS];
+        for s in self.blocks.live() {
+            let b = &self.blocks.slots[s];
+            if b.stamp != stamp {
+                hist[bin(dist(b))] += 1;
+            }
+        }
+        let Some(threshold) = threshold(&hist, B) else {
+            return 0;
+        };
+        let mut evicted = 0;
+        for s in 0..B {
+            let b = self.blocks.slots[s];
+            if b.packed_key() == 0 || b.stamp == stamp || bin(dist(&b)) < threshold {
+                continue;
+            }
+            let mut surface = b.surface;
+            while surface != 0 {
+                let cell = surface.trailing_zeros();
+                surface &= surface - 1;
+                let key = VoxelKey::from_block_cell(b.packed_key(), cell);
+                if let Some(v) = self.voxels.find(key.packed()) {
+                    self.voxels.remove(v);
+                    self.stats.voxels_evicted += 1;
+                }
+            }
+            self.blocks.remove(s);
+            evicted += 1;
+        }
+        self.stats.blocks_evicted += evicted as u64;
+        evicted
+    }
+
+    /// Evicts NDT voxels farthest from `center` that got no points in frame `stamp`; their
+    /// occupancy stays in the block layer. Returns how many went.
+    pub(crate) fn evict_voxels(&mut self, center: &VoxelKey, stamp: u16) -> u32 {
+        let mut hist = [0u32; BINS];
+        for s in self.voxels.live() {
+            let key = self.voxels.slots[s].voxel_key();
+            if !self.hit_this_frame(&key, stamp) {
+                hist[bin(key.chebyshev(center))] += 1;
+            }
+        }
+        let Some(threshold) = threshold(&hist, V) else {
+            return 0;
+        };
+        let mut evicted = 0;
+        for s in 0..V {
+            let v = &self.voxels.slots[s];
+            if v.packed_key() == 0 {
+                continue;
+            }
+            let key = v.voxel_key();
+            if bin(key.chebyshev(center)) < threshold || self.hit_this_frame(&key, stamp) {
+                continue;
+            }
+            self.voxels.remove(s);
+            if let Some(b) = self.blocks.find(key.block()) {
+                self.blocks.slots[b].surface &= !(1u64 << key.cell());
+            }
+            evicted += 1;
+        }
+        self.stats.voxels_evicted += evicted as u64;
+        evicted
+    }
+
+    fn hit_this_frame(&self, key: &VoxelKey, stamp: u16) -> bool {
+        match self.blocks.find(key.block()) {
+            Some(b) => {
+                let b = &self.blocks.slots[b];
+                b.stamp == stamp && b.hit & (1u64 << key.cell()) != 0
+            }
+            None => false,
+        }
+    }
+}
+
+/// Distance histogram resolution for eviction.
+const BINS: usize = 512;
+
+/// Distance bins: exact up to 255, then 64 wide, last bin open-ended.
+fn bin(d: u32) -> usize {
+    if d < 256 {
+        d as usize
+    } else {
+        (256 + (d - 256) / 64).min(BINS as u32 - 1) as usize
+    }
+}
+
+fn block_distance(a: u64, b: u64) -> u32 {
+    let d = |s: u32| (((a >> s) & 0xffff) as i32 - ((b >> s) & 0xffff) as i32).unsigned_abs();
+    d(32).max(d(16)).max(d(0))
+}
+
+/// Eviction policy: evict every evictable entry in the farthest distance bins, taking whole
+/// bins from the far end until at least 1/16 of the capacity (at least one entry) goes.
+/// Returns the first bin to evict, or `None` when nothing is evictable.
+fn threshold(hist: &[u32; BINS], capacity: usize) -> Option<usize> {
+    let target = (capacity / 16).max(1) as u32;
+    let mut sum = 0u32;
+    let mut last = None;
+    for b in (0..BINS).rev() {
+        if hist[b] > 0 {
+            sum += hist[b];
+            last = Some(b);
+            if sum >= target {
+                break;
+            }
+        }
+    }
+    last
+}

@@ -1,0 +1,426 @@
+//! Snapshot: a versioned little-endian image of the map with a CRC-32, written into and
+//! read from a caller's buffer.
+//!
+//! Layout (all little-endian):
+//!
+//! | bytes | field |
+//! |---|---|
+//! | 4 | magic `SNDT` |
+//! | 2 | version ([`SNAPSHOT_VERSION`]) |
+//! | 2 | classes `C` |
+//! | 4 + 4 | voxel and block capacity of the writer |
+//! | 60 | config: cell_size, eigen_ratio, hit, miss, clamp_min, clamp_max, lambda, noise_base, noise_quadratic, max_range, render_radius (f32 bits), n_min, n_max (u32), quant_bits, top_k, min_score, miss_model (u8), 4 zero bytes |
+//! | 4 | frames integrated |
+//! | 4 + 4 | block count, voxel count |
+//! | 142 each | blocks: key (3 x u16, biased by 32768), 64 x i16 log-odds, u64 surface mask |
+//! | 46 + C each | voxels: key (3 x u16), n (u32), S1 (3 x i32), S2 (6 x i32), C x u8 histogram |
+//! | 4 | CRC-32 (IEEE) of everything before |
+//!
+//! Blocks and voxels appear in canonical order (by key hash, then key), so equal maps give
+//! equal bytes whatever order they were built in, and duplicates are detectable.
+
+use crate::block::Block;
+use crate::config::{Config, MissModel};
+use crate::crc::{crc32, Crc};
+use crate::key::{order, KEY_LIMIT};
+use crate::map::Map;
+use crate::table::Entry;
+use crate::voxel::{split_key, Voxel};
+use crate::Error;
+
+/// Snapshot format version written by this build.
+pub const SNAPSHOT_VERSION: u16 = 1;
+/// Bytes before the first block record.
+pub const SNAPSHOT_HEADER_BYTES: usize = 88;
+/// Bytes of one block record.
+pub const SNAPSHOT_BLOCK_BYTES: usize = 142;
+const MAGIC: &[u8; 4] = b"SNDT";
+
+struct Writer<'a> {
+    buf: &'a mut [u8],
+    pos: usize,
+}
+
+impl Writer<'_> {
+    fn put(&mut self, bytes: &[u8]) {
+        self.buf[self.pos..self.pos + bytes.len()].copy_from_slice(bytes);
+        self.pos += bytes.len();
+    }
+}
+
+struct Reader<'a> {
+    buf: &'a [u8],
+    pos: usize,
+}
+
+impl Reader<'_> {
+    fn take<const N: usize>(&mut self) -> [u8; N] {
+        let mut out = [0u8; N];
+        if let Some(s) = self.buf.get(self.pos..self.pos + N) {
+            out.copy_from_slice(s);
+        }
+        self.pos += N;
+        out
+    }
+    fn u8(&mut self) -> u8 {
+        self.take::<1>()[0]
+    }
+    fn u16(&mut self) -> u16 {
+        u16::from_le_bytes(self.take())
+    }
+    fn i16(&mut self) -> i16 {
+        i16::from_le_bytes(self.take())
+    }
+    fn u32(&mut self) -> u32 {
+        u32::from_le_bytes(self.take())
+    }
+    fn i32(&mut self) -> i32 {
+        i32::from_le_bytes(self.take())
+    }
+    fn f32(&mut self) -> f32 {
+        f32::from_bits(self.u32())
+    }
+    fn u64(&mut self) -> u64 {
+        u64::from_le_bytes(self.take())
+    }
+    fn key(&mut self) -> u64 {
+        let k = [self.u16(), self.u16(), self.u16()];
+        ((k[0] as u64) << 32) | ((k[1] as u64) << 16) | k[2] as u64
+    }
+}
+
+impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
+    /// Bytes of one voxel record in a snapshot.
+    pub const SNAPSHOT_VOXEL_BYTES: usize = 46 + C;
+
+    /// Exact length of this map's snapshot.
+    pub fn snapshot_len(&self) -> usize {
+        SNAPSHOT_HEADER_BYTES
+            + self.blocks.len() * SNAPSHOT_BLOCK_BYTES
+            + self.voxels.len() * Self::SNAPSHOT_VOXEL_BYTES
+            + 4
+    }
+
+    /// Writes the snapshot into `buf` and returns its length, or
+    /// [`Error::BufferTooSmall`] (nothing written).
+    ///
+    /// ```
+    /// use sndt_core::*;
+    /// let mut map: Map<64, 16, 4> = Map::new(Config::DEFAULT);
+    /// let p = [LabeledPoint::new(Point3::new(0.0, 0.0, 1.0), Labels::top1(2)); 5];
+    /// map.integrate(&Isometry3::identity(), &p).unwrap();
+    /// let mut buf = [0u8; 4096];
+    /// let n = map.write_snapshot(&mut buf).unwrap();
+    /// let mut copy: Map<64, 16, 4> = Map::new(Config::DEFAULT);
+    /// copy.read_snapshot(&buf[..n]).unwrap();
+    /// let mut buf2 = [0u8; 4096];
+    /// assert_eq!(copy.write_snapshot(&mut buf2), Ok(n));
+    /// assert_eq!(buf[..n], buf2[..n]);
+    /// buf[40] ^= 1;
+    /// assert_eq!(copy.read_snapshot(&buf[..n]), Err(Error::SnapshotChecksum));
+    /// ```
+    pub fn write_snapshot(&self, buf: &mut [u8]) -> Result<usize, Error> {
+        let len = self.snapshot_len();
+        if buf.len() < len {
+            return Err(Error::BufferTooSmall);
+        }
+        let mut w = Writer { buf, pos: 0 };
+        let mut hdr = [0u8; SNAPSHOT_HEADER_BYTES];
+        self.write_header(&mut hdr);
+        w.put(&hdr);
+        let mut chunk = [0u8; 160];
+        for s in self.blocks.canonical() {
+            let n = block_record(&self.blocks.slots[s], &mut chunk);
+            w.put(&chunk[..n]);
+        }
+        for s in self.voxels.canonical() {
+            let v = &self.voxels.slots[s];
+            let n = voxel_record_head(v, &mut chunk);
+            w.put(&chunk[..n]);
+            w.put(&v.hist);
+        }
+        let crc = crc32(&w.buf[..w.pos]);
+        w.put(&crc.to_le_bytes());
+        Ok(w.pos)
+    }
+
+    /// CRC-32 of the map's snapshot, computed without a buffer (the last four bytes
+    /// [`Map::write_snapshot`] writes). Equal maps have equal checksums on every target.
+    pub fn checksum(&self) -> u32 {
+        let mut crc = Crc::new();
+        let mut chunk = [0u8; 160];
+        // Header and records are streamed through a small stack buffer.
+        let mut hdr = [0u8; SNAPSHOT_HEADER_BYTES];
+        self.write_header(&mut hdr);
+        crc.update(&hdr);
+        for s in self.blocks.canonical() {
+            let n = block_record(&self.blocks.slots[s], &mut chunk);
+            crc.update(&chunk[..n]);
+        }
+        for s in self.voxels.canonical() {
+            let v = &self.voxels.slots[s];
+            let n = voxel_record_head(v, &mut chunk);
+            crc.update(&chunk[..n]);
+            crc.update(&v.hist);
+        }
+        crc.finish()
+    }
+
+    fn write_header(&self, hdr: &mut [u8; SNAPSHOT_HEADER_BYTES]) {
+        let mut w = Writer { buf: hdr, pos: 0 };
+        let c = &self.config;
+        w.put(MAGIC);
+        w.put(&SNAPSHOT_VERSION.to_le_bytes());
+        w.put(&(C as u16).to_le_bytes());
+        w.put(&(V as u32).to_le_bytes());
+        w.put(&(B as u32).to_le_bytes());
+        for f in [
+            c.cell_size,
+            c.eigen_ratio,
+            c.hit,
+            c.miss,
+            c.clamp_min,
+            c.clamp_max,
+            c.lambda,
+            c.noise_base,
+            c.noise_quadratic,
+            c.max_range,
+            c.render_radius,
+        ] {
+            w.put(&f.to_bits().to_le_bytes());
+        }
+        w.put(&c.n_min.to_le_bytes());
+        w.put(&c.n_max.to_le_bytes());
+        let model = match c.miss_model {
+            MissModel::NdtOm => 0u8,
+            MissModel::Constant => 1u8,
+        };
+        w.put(&[c.quant_bits, c.top_k, c.min_score, model, 0, 0, 0, 0]);
+        w.put(&self.stats.frames.to_le_bytes());
+        w.put(&(self.blocks.len() as u32).to_le_bytes());
+        w.put(&(self.voxels.len() as u32).to_le_bytes());
+    }
+
+    /// Replaces the map's content with a snapshot. The whole snapshot is checked first
+    /// (length, magic, version, class count, capacity, CRC, then every record's
+    /// invariants); on any error the map is left exactly as it was.
+    pub fn read_snapshot(&mut self, buf: &[u8]) -> Result<(), Error> {
+        let (config, frames, nb, nv) = Self::validate_snapshot(buf)?;
+        self.voxels.clear();
+        self.blocks.clear();
+        self.config = config;
+        self.stats = crate::MapStats {
+            frames,
+            ..Default::default()
+        };
+        let mut r = Reader {
+            buf,
+            pos: SNAPSHOT_HEADER_BYTES,
+        };
+        for _ in 0..nb {
+            let mut b = Block::new(r.key());
+            for l in b.cells.iter_mut() {
+                *l = r.i16();
+            }
+            b.surface = r.u64();
+            let _ = self.blocks.insert(b);
+        }
+        for _ in 0..nv {
+            let mut v = Voxel::<C>::EMPTY;
+            v.key = split_key(r.key());
+            v.n = r.u32();
+            for x in v.s1.iter_mut() {
+                *x = r.i32();
+            }
+            for x in v.s2.iter_mut() {
+                *x = r.i32();
+            }
+            for x in v.hist.iter_mut() {
+                *x = r.u8();
+            }
+            let _ = self.voxels.insert(v);
+        }
+        Ok(())
+    }
+
+    /// Checks a snapshot completely without touching the map.
+    fn validate_snapshot(buf: &[u8]) -> Result<(Config, u32, usize, usize), Error> {
+        if buf.len() < SNAPSHOT_HEADER_BYTES + 4 {
+            return Err(Error::SnapshotTruncated);
+        }
+        let mut r = Reader { buf, pos: 0 };
+        if &r.take::<4>() != MAGIC {
+            return Err(Error::SnapshotMagic);
+        }
+        if r.u16() != SNAPSHOT_VERSION {
+            return Err(Error::SnapshotVersion);
+        }
+        if r.u16() as usize != C {
+            return Err(Error::SnapshotClasses);
+        }
+        let _writer_capacity = (r.u32(), r.u32());
+        let mut c = Config::DEFAULT;
+        c.cell_size = r.f32();
+        c.eigen_ratio = r.f32();
+        c.hit = r.f32();
+        c.miss = r.f32();
+        c.clamp_min = r.f32();
+        c.clamp_max = r.f32();
+        c.lambda = r.f32();
+        c.noise_base = r.f32();
+        c.noise_quadratic = r.f32();
+        c.max_range = r.f32();
+        c.render_radius = r.f32();
+        c.n_min = r.u32();
+        c.n_max = r.u32();
+        c.quant_bits = r.u8();
+        c.top_k = r.u8();
+        c.min_score = r.u8();
+        let model = r.u8();
+        let _pad = r.u32();
+        let frames = r.u32();
+        let nb = r.u32() as usize;
+        let nv = r.u32() as usize;
+        let expect = (nb as u64) * SNAPSHOT_BLOCK_BYTES as u64
+            + (nv as u64) * Self::SNAPSHOT_VOXEL_BYTES as u64
+            + SNAPSHOT_HEADER_BYTES as u64
+            + 4;
+        if buf.len() as u64 != expect {
+            return Err(Error::SnapshotTruncated);
+        }
+        let body = buf.len() - 4;
+        let stored = u32::from_le_bytes([buf[body], buf[body + 1], buf[body + 2], buf[body + 3]]);
+        if crc32(&buf[..body]) != stored {
+            return Err(Error::SnapshotChecksum);
+        }
+        if nb > B || nv > V {
+            return Err(Error::SnapshotCapacity);
+        }
+        c.miss_model = match model {
+            0 => MissModel::NdtOm,
+            1 => MissModel::Constant,
+            _ => return Err(Error::SnapshotCorrupt),
+        };
+        c.validate().map_err(|_| Error::SnapshotCorrupt)?;
+        let (lo, hi) = (
+            crate::config::to_fixed(c.clamp_min),
+            crate::config::to_fixed(c.clamp_max),
+        );
+
+        // Blocks: strictly increasing canonical order, valid keys, clamped log-odds.
+        let block_key_ok = |k: u64| {
+            (0..3).all(|i| {
+                let v = ((k >> (32 - 16 * i)) & 0xffff) as i32 - 32768;
+                (-(KEY_LIMIT + 1) / 4..=KEY_LIMIT / 4).contains(&v)
+            })
+        };
+        let mut last = None;
+        let mut surface_bits = 0usize;
+        for _ in 0..nb {
+            let k = r.key();
+            if !block_key_ok(k) || last.is_some_and(|l| l >= order(k)) {
+                return Err(Error::SnapshotCorrupt);
+            }
+            last = Some(order(k));
+            for _ in 0..64 {
+                let l = r.i16() as i32;
+                if l < lo || l > hi {
+                    return Err(Error::SnapshotCorrupt);
+                }
+            }
+            surface_bits += r.u64().count_ones() as usize;
+        }
+        if surface_bits != nv {
+            return Err(Error::SnapshotCorrupt);
+        }
+
+        // Voxels: strictly increasing canonical order, valid keys and sums, and each one's
+        // surface bit set in its block.
+        let qhalf = 1i64 << (c.quant_bits - 1);
+        let mut last = None;
+        for _ in 0..nv {
+            let k = r.key();
+            if (0..3).any(|i| (k >> (32 - 16 * i)) & 0xffff == 0)
+                || last.is_some_and(|l| l >= order(k))
+            {
+                return Err(Error::SnapshotCorrupt);
+            }
+            last = Some(order(k));
+            let n = r.u32();
+            if n == 0 || n > c.n_max {
+                return Err(Error::SnapshotCorrupt);
+            }
+            let n = n as i64;
+            let mut s1 = [0i64; 3];
+            for x in s1.iter_mut() {
+                *x = r.i32() as i64;
+            }
+            let mut s2 = [0i64; 6];
+            for x in s2.iter_mut() {
+                *x = r.i32() as i64;
+            }
+            let _hist = r.take::<0>();
+            r.pos += C;
+            let bound1 = n * qhalf;
+            let bound2 = n * qhalf * qhalf;
+            if s1.iter().any(|x| x.abs() > bound1)
+                || s2.iter().any(|x| x.abs() > bound2)
+                || [s2[0], s2[3], s2[5]].iter().any(|&d| d < 0)
+            {
+                return Err(Error::SnapshotCorrupt);
+            }
+            let key = crate::key::VoxelKey::unpack(k);
+            if !Self::surface_bit_set(buf, nb, key.block(), key.cell()) {
+                return Err(Error::SnapshotCorrupt);
+            }
+        }
+        Ok((c, frames, nb, nv))
+    }
+
+    /// Binary search of the (canonically sorted) block records for a surface bit.
+    fn surface_bit_set(buf: &[u8], nb: usize, block: u64, cell: u32) -> bool {
+        let want = order(block);
+        let (mut lo, mut hi) = (0usize, nb);
+        while lo < hi {
+            let mid = (lo + hi) / 2;
+            let mut r = Reader {
+                buf,
+                pos: SNAPSHOT_HEADER_BYTES + mid * SNAPSHOT_BLOCK_BYTES,
+            };
+            let k = r.key();
+            match order(k).cmp(&want) {
+                core::cmp::Ordering::Less => lo = mid + 1,
+                core::cmp::Ordering::Greater => hi = mid,
+                core::cmp::Ordering::Equal => {
+                    r.pos += 128;
+                    return r.u64() & (1u64 << cell) != 0;
+                }
+            }
+        }
+        false
+    }
+}
+
+fn block_record(b: &Block, out: &mut [u8; 160]) -> usize {
+    let mut w = Writer { buf: out, pos: 0 };
+    for k in b.key {
+        w.put(&k.to_le_bytes());
+    }
+    for l in b.cells {
+        w.put(&l.to_le_bytes());
+    }
+    w.put(&b.surface.to_le_bytes());
+    w.pos
+}
+
+fn voxel_record_head<const C: usize>(v: &Voxel<C>, out: &mut [u8; 160]) -> usize {
+    let mut w = Writer { buf: out, pos: 0 };
+    for k in v.key {
+        w.put(&k.to_le_bytes());
+    }
+    w.put(&v.n.to_le_bytes());
+    for x in v.s1.iter().chain(v.s2.iter()) {
+        w.put(&x.to_le_bytes());
+    }
+    w.pos
+}

@@ -1,0 +1,253 @@
+//! Voxel statistics: integer-quantised point sums, the Gaussian they define, and the `u8`
+//! class histogram.
+//!
+//! A point `p` in voxel `k` contributes `q = round((p / h - k - 1/2) 2^Q)` (so
+//! `|q_i| <= 2^(Q-1)`) to `S1 = sum q` and `S2 = sum q q^T`. With `n <= n_max +`
+//! [`crate::MAX_FRAME_POINTS`] `<= 2^21` and `Q <= 6`, `|S1_i| <= 2^26` and
+//! `|S2_ij| <= 2^21 * 2^10 = 2^31 - 2^21 ...` fit an `i32` (see `sums_cannot_overflow` in the
+//! tests), so the sums are exact and independent of point order.
+
+use crate::key::VoxelKey;
+use crate::table::Entry;
+use nalgebra::{Matrix3, Vector3};
+
+/// A surface (NDT) voxel: point sums, class histogram, table link.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Voxel<const C: usize> {
+    /// `S2` entries xx, xy, xz, yy, yz, zz in quanta squared.
+    pub(crate) s2: [i32; 6],
+    /// `S1` in quanta.
+    pub(crate) s1: [i32; 3],
+    /// Point count; 0 only for an empty slot.
+    pub(crate) n: u32,
+    pub(crate) chain: u32,
+    /// Head of hash bucket `slot` (see `table.rs`).
+    pub(crate) head: u32,
+    /// Packed key split in three `u16` (keeps the struct 4-byte aligned).
+    pub(crate) key: [u16; 3],
+    /// Class votes; bin `i` is class `i + 1`.
+    pub(crate) hist: [u8; C],
+}
+
+impl<const C: usize> Entry for Voxel<C> {
+    const EMPTY: Self = Voxel {
+        s2: [0; 6],
+        s1: [0; 3],
+        n: 0,
+        chain: 0,
+        head: 0,
+        key: [0; 3],
+        hist: [0; C],
+    };
+    fn packed_key(&self) -> u64 {
+        ((self.key[0] as u64) << 32) | ((self.key[1] as u64) << 16) | self.key[2] as u64
+    }
+    fn chain(&self) -> u32 {
+        self.chain
+    }
+    fn set_chain(&mut self, next: u32) {
+        self.chain = next;
+    }
+    fn head(&self) -> u32 {
+        self.head
+    }
+    fn set_head(&mut self, head: u32) {
+        self.head = head;
+    }
+}
+
+pub(crate) fn split_key(packed: u64) -> [u16; 3] {
+    [(packed >> 32) as u16, (packed >> 16) as u16, packed as u16]
+}
+
+impl<const C: usize> Voxel<C> {
+    pub(crate) fn new(key: &VoxelKey) -> Self {
+        let mut v = Self::EMPTY;
+        v.key = split_key(key.packed());
+        v
+    }
+
+    pub(crate) fn voxel_key(&self) -> VoxelKey {
+        VoxelKey::unpack(self.packed_key())
+    }
+
+    /// Adds one quantised offset.
+    #[inline]
+    pub(crate) fn add(&mut self, q: [i32; 3]) {
+        self.n += 1;
+        self.s1[0] += q[0];
+        self.s1[1] += q[1];
+        self.s1[2] += q[2];
+        self.s2[0] += q[0] * q[0];
+        self.s2[1] += q[0] * q[1];
+        self.s2[2] += q[0] * q[2];
+        self.s2[3] += q[1] * q[1];
+        self.s2[4] += q[1] * q[2];
+        self.s2[5] += q[2] * q[2];
+    }
+
+    /// Halves count and sums until `n <= n_max` (rounding halves away from zero for the
+    /// sums so the mean is kept; `n` rounds up so it never reaches 0).
+    pub(crate) fn decay(&mut self, n_max: u32) {
+        while self.n > n_max {
+            self.n = self.n.div_ceil(2);
+            for s in self.s1.iter_mut().chain(self.s2.iter_mut()) {
+                *s = half_round(*s);
+            }
+        }
+    }
+
+    /// Halves every bin if any bin exceeds 127 so the frame's votes have room
+    /// (done once per voxel per frame, so the result does not depend on point order).
+    pub(crate) fn make_vote_room(&mut self) {
+        if self.hist.iter().any(|&b| b > 127) {
+            for b in self.hist.iter_mut() {
+                *b /= 2;
+            }
+        }
+    }
+
+    /// Mean and covariance in metres (covariance needs `n >= 2`).
+    pub(crate) fn gaussian(&self, h: f32, step: f32) -> Gaussian {
+        let key = self.voxel_key();
+        let c = key.center(h);
+        let n = self.n.max(1) as f32;
+        let mean = Vector3::new(
+            c[0] + self.s1[0] as f32 / n * step,
+            c[1] + self.s1[1] as f32 / n * step,
+            c[2] + self.s1[2] as f32 / n * step,
+        );
+        let mut cov = Matrix3::zeros();
+        if self.n >= 2 {
+            // n S2 - S1 S1^T is exact in i64; one rounding to f32 afterwards.
+            let n64 = self.n as i64;
+            let s1 = [self.s1[0] as i64, self.s1[1] as i64, self.s1[2] as i64];
+            let idx = [
+                (0, 0, 0),
+                (0, 1, 1),
+                (0, 2, 2),
+                (1, 1, 3),
+                (1, 2, 4),
+                (2, 2, 5),
+            ];
+            let scale = step * step / (self.n as f32 * (self.n - 1) as f32);
+            for &(i, j, s) in idx.iter() {
+                let v = n64 * self.s2[s] as i64 - s1[i] * s1[j];
+                let f = v as f32 * scale;
+                cov[(i, j)] = f;
+                cov[(j, i)] = f;
+            }
+        }
+        Gaussian {
+            mean,
+            covariance: cov,
+            count: self.n,
+        }
+    }
+}
+
+/// Rounds `s / 2` half away from zero.
+fn half_round(s: i32) -> i32 {
+    if s >= 0 {
+        (s + 1) >> 1
+    } else {
+        -((-s + 1) >> 1)
+    }
+}
+
+/// A voxel's normal distribution in world coordinates (metres).
+///
+/// ```
+/// use sndt_core::{Config, LabeledPoint, Labels, Map, Isometry3, Point3};
+/// let mut map: Map<64, 16, 4> = Map::new(Config::DEFAULT);
+/// let pts = [
+///     LabeledPoint::new(Point3::new(0.01, 0.02, 1.01), Labels::top1(1)),
+///     LabeledPoint::new(Point3::new(0.03, 0.02, 1.03), Labels::top1(1)),
+///     LabeledPoint::new(Point3::new(0.05, 0.08, 1.01), Labels::top1(1)),
+/// ];
+/// map.integrate(&Isometry3::identity(), &pts).unwrap();
+/// let g = map.gaussian_at(&[0.03, 0.04, 1.02]).unwrap();
+/// assert_eq!(g.count, 3);
+/// assert!((g.mean.x - 0.03).abs() < 1e-3);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Gaussian {
+    /// Mean in metres.
+    pub mean: Vector3<f32>,
+    /// Sample covariance in square metres (zero for fewer than 2 points).
+    pub covariance: Matrix3<f32>,
+    /// Number of points (after decay).
+    pub count: u32,
+}
+
+/// A Gaussian ready for ray tests: mean and inverse covariance with the eigenvalue floor.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Prepared {
+    pub(crate) mean: Vector3<f32>,
+    pub(crate) inv: Matrix3<f32>,
+}
+
+impl Gaussian {
+    /// Inverse covariance with eigenvalues raised to `ratio * lambda_max` (and to `floor_abs`
+    /// for a degenerate voxel whose points coincide).
+    pub(crate) fn prepare(&self, ratio: f32, floor_abs: f32) -> Prepared {
+        let (vals, vecs) = symmetric_eigen(&self.covariance);
+        let lmax = vals[0].max(vals[1]).max(vals[2]);
+        let floor = (lmax * ratio).max(floor_abs);
+        let mut inv = Matrix3::zeros();
+        for (i, val) in vals.iter().enumerate() {
+            let l = val.max(floor);
+            let v = vecs.column(i);
+            inv += v * v.transpose() * (1.0 / l);
+        }
+        Prepared {
+            mean: self.mean,
+            inv,
+        }
+    }
+}
+
+/// Eigenvalues and eigenvectors (columns) of a symmetric 3x3 matrix by cyclic Jacobi
+/// rotations. Pure arithmetic plus `libm::sqrtf`, so results are bit-identical on every target.
+pub(crate) fn symmetric_eigen(m: &Matrix3<f32>) -> ([f32; 3], Matrix3<f32>) {
+    let mut a = *m;
+    let mut v = Matrix3::<f32>::identity();
+    for _sweep in 0..12 {
+        let off = a[(0, 1)] * a[(0, 1)] + a[(0, 2)] * a[(0, 2)] + a[(1, 2)] * a[(1, 2)];
+        let diag = a[(0, 0)] * a[(0, 0)] + a[(1, 1)] * a[(1, 1)] + a[(2, 2)] * a[(2, 2)];
+        if off <= diag * 1e-14 || off == 0.0 {
+            break;
+        }
+        for &(p, q) in &[(0usize, 1usize), (0, 2), (1, 2)] {
+            let apq = a[(p, q)];
+            if apq == 0.0 {
+                continue;
+            }
+            let theta = (a[(q, q)] - a[(p, p)]) / (2.0 * apq);
+            let sign = if theta >= 0.0 { 1.0 } else { -1.0 };
+            let t = sign / (theta.abs() + libm::sqrtf(theta * theta + 1.0));
+            let c = 1.0 / libm::sqrtf(t * t + 1.0);
+            let s = t * c;
+            // A <- J^T A J with J the rotation in the (p, q) plane.
+            for k in 0..3 {
+                let akp = a[(k, p)];
+                let akq = a[(k, q)];
+                a[(k, p)] = c * akp - s * akq;
+                a[(k, q)] = s * akp + c * akq;
+            }
+            for k in 0..3 {
+                let apk = a[(p, k)];
+                let aqk = a[(q, k)];
+                a[(p, k)] = c * apk - s * aqk;
+                a[(q, k)] = s * apk + c * aqk;
+            }
+            for k in 0..3 {
+                let vkp = v[(k, p)];
+                let vkq = v[(k, q)];
+                v[(k, p)] = c * vkp - s * vkq;
+                v[(k, q)] = s * vkp + c * vkq;
+            }
+        }
+    }
+    ([a[(0, 0)], a[(1, 1)], a[(2, 2)]], v)
+}

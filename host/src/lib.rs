@@ -1,0 +1,1 @@
+//! sndt-host: std tools around `sndt-core`.
