@@ -12,10 +12,10 @@
 
 use crate::block::Block;
 use crate::config::{to_fixed, MissModel};
-use crate::key::{axis_key, VoxelKey};
+use crate::key::{axis_key, floor_i32, VoxelKey};
 use crate::map::Map;
 use crate::table::{Entry, NIL};
-use crate::voxel::{Prepared, Voxel};
+use crate::voxel::{PrepCache, Prepared, Voxel};
 use crate::{Error, LabeledPoint, Labels, MAX_FRAME_POINTS, MAX_TOP_K};
 use nalgebra::{Isometry3, Matrix3, Vector3};
 
@@ -176,22 +176,58 @@ struct Frame {
     origin_key: VoxelKey,
     stamp: u16,
     h: f32,
+    inv_h: f32,
+    /// `2^Q / h`: world metres to quanta.
+    inv_quantum: f32,
+    /// Key range in quanta: `[-32767 * 2^Q, 32768 * 2^Q)`.
+    t_min: f32,
+    t_max: f32,
+    quant_bits: u32,
+    quant_mask: i32,
     qscale: f32,
     qhalf: i32,
     max_range: f32,
     head: u32,
     block_cache: (u64, usize),
     voxel_cache: (u64, usize),
+    run: Run,
     report: FrameReport,
     evicted_before: (u64, u64),
 }
 
-/// Direct-mapped cache of prepared Gaussians, keyed by voxel slot (valid during phase 3,
-/// when voxel statistics no longer change).
-struct GaussCache {
-    tags: [u32; 32],
-    entries: [Option<Prepared>; 32],
+/// Sums of consecutive points that fell into the same voxel (slot), not yet added to it.
+pub(crate) struct Run {
+    pub(crate) slot: usize,
+    pub(crate) n: u32,
+    pub(crate) s1: [i32; 3],
+    pub(crate) s2: [i32; 6],
 }
+
+impl Run {
+    const EMPTY: Run = Run {
+        slot: usize::MAX,
+        n: 0,
+        s1: [0; 3],
+        s2: [0; 6],
+    };
+
+    #[inline]
+    fn add(&mut self, q: [i32; 3]) {
+        self.n += 1;
+        self.s1[0] += q[0];
+        self.s1[1] += q[1];
+        self.s1[2] += q[2];
+        self.s2[0] += q[0] * q[0];
+        self.s2[1] += q[0] * q[1];
+        self.s2[2] += q[0] * q[2];
+        self.s2[3] += q[1] * q[1];
+        self.s2[4] += q[1] * q[2];
+        self.s2[5] += q[2] * q[2];
+    }
+}
+
+/// Prepared-Gaussian cache of phase 3 (voxel statistics no longer change then).
+type GaussCache = PrepCache<32>;
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// Integrates one frame of labelled points given in the sensor frame at `pose`
@@ -251,7 +287,9 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             return Err(Error::FrameTooLarge);
         }
         let mut f = self.begin(pose)?;
+        let (ifx, ify) = (1.0 / cam.fx, 1.0 / cam.fy);
         for row in (0..h).step_by(stride) {
+            let ry = (row as f32 + 0.5 - cam.cy) * ify;
             for col in (0..w).step_by(stride) {
                 let i = row * w + col;
                 let d = image.depth[i];
@@ -259,7 +297,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                     f.report.rejected_depth += 1;
                     continue;
                 }
-                let r = cam.ray(col as u32, row as u32);
+                let r = [(col as f32 + 0.5 - cam.cx) * ifx, ry, 1.0];
                 let scale = match image.kind {
                     DepthKind::Planar => d,
                     DepthKind::Range => d / libm::sqrtf(r[0] * r[0] + r[1] * r[1] + 1.0),
@@ -284,7 +322,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         }
         let h = self.config.cell_size;
         let origin = [t.x, t.y, t.z];
-        let origin_s = [t.x / h, t.y / h, t.z / h];
+        let inv_h = 1.0 / h;
+        let origin_s = [t.x * inv_h, t.y * inv_h, t.z * inv_h];
         let ok = |s: f32| axis_key(s).map(|k| k as i32);
         let origin_key = match (ok(origin_s[0]), ok(origin_s[1]), ok(origin_s[2])) {
             (Some(x), Some(y), Some(z)) => VoxelKey::from_ints(x, y, z),
@@ -307,18 +346,26 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             origin_key,
             stamp,
             h,
+            inv_h,
+            inv_quantum: inv_h * qscale,
+            t_min: -(crate::key::KEY_LIMIT as f32) * qscale,
+            t_max: (crate::key::KEY_LIMIT + 1) as f32 * qscale,
+            quant_bits: self.config.quant_bits as u32,
+            quant_mask: (1 << self.config.quant_bits) - 1,
             qscale,
             qhalf: 1 << (self.config.quant_bits - 1),
             max_range: self.config.max_range,
             head: NIL,
             block_cache: (0, 0),
             voxel_cache: (0, 0),
+            run: Run::EMPTY,
             report: FrameReport::default(),
             evicted_before: (self.stats.voxels_evicted, self.stats.blocks_evicted),
         })
     }
 
     /// Phase 1 for one point `p` in the sensor frame.
+    #[inline]
     fn add_point(&mut self, f: &mut Frame, p: [f32; 3], labels: &Labels) {
         let r2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
         if !(r2.is_finite() && r2 > 0.0) {
@@ -335,26 +382,41 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         for (i, wi) in w.iter_mut().enumerate() {
             *wi = m[(i, 0)] * p[0] + m[(i, 1)] * p[1] + m[(i, 2)] * p[2] + f.origin[i];
         }
-        let range = libm::sqrtf(r2);
-        if range > f.max_range {
-            self.add_truncated(f, &w, range);
+        if r2 > f.max_range * f.max_range {
+            self.add_truncated(f, &w, libm::sqrtf(r2));
             return;
         }
-        let s = [w[0] / f.h, w[1] / f.h, w[2] / f.h];
-        let (Some(x), Some(y), Some(z)) = (axis_key(s[0]), axis_key(s[1]), axis_key(s[2])) else {
-            f.report.rejected_out_of_range += 1;
-            return;
-        };
-        let key = VoxelKey { x, y, z };
+        // Work in quanta (t = p / h * 2^Q, exact power-of-two scaling of p / h): one
+        // float-to-int conversion per axis gives both the key (floor(t) >> Q) and the
+        // quantised offset (round half up of t - 2^Q k - 2^(Q-1)).
+        let mut key_i = [0i32; 3];
         let mut q = [0i32; 3];
-        let k = [x, y, z];
         for i in 0..3 {
-            let frac = s[i] - k[i] as f32;
-            q[i] = (libm::roundf((frac - 0.5) * f.qscale) as i32).clamp(-f.qhalf, f.qhalf);
+            let t = w[i] * f.inv_quantum;
+            if !(t >= f.t_min && t < f.t_max) {
+                f.report.rejected_out_of_range += 1;
+                return;
+            }
+            let m = floor_i32(t);
+            key_i[i] = m >> f.quant_bits;
+            q[i] = (m & f.quant_mask) - f.qhalf + ((t - m as f32) >= 0.5) as i32;
         }
-        let Some(bs) = self.frame_block(f, key.block(), true) else {
-            f.report.dropped_points += 1;
-            return;
+        let key = VoxelKey {
+            x: key_i[0] as i16,
+            y: key_i[1] as i16,
+            z: key_i[2] as i16,
+        };
+        let packed_block = key.block();
+        let bs = if f.block_cache.0 == packed_block {
+            f.block_cache.1
+        } else {
+            match self.frame_block(f, packed_block, true) {
+                Some(bs) => bs,
+                None => {
+                    f.report.dropped_points += 1;
+                    return;
+                }
+            }
         };
         let bit = 1u64 << key.cell();
         let packed = key.packed();
@@ -391,9 +453,13 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 }
             }
         };
+        if f.run.slot != vs {
+            self.flush_run(f);
+            f.run.slot = vs;
+        }
         f.voxel_cache = (packed, vs);
+        f.run.add(q);
         let v = &mut self.voxels.slots[vs];
-        v.add(q);
         let k = (self.config.top_k as usize).min(n);
         for i in 0..k {
             let c = labels.classes[i] as usize;
@@ -409,7 +475,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let mut k = [0i16; 3];
         for i in 0..3 {
             let e = f.origin[i] + (w[i] - f.origin[i]) * scale;
-            match axis_key(e / f.h) {
+            match axis_key(e * f.inv_h) {
                 Some(v) => k[i] = v,
                 None => {
                     f.report.rejected_out_of_range += 1;
@@ -468,7 +534,19 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         Some(bs)
     }
 
+    /// Adds the pending run of points (consecutive points in one voxel, summed in
+    /// registers) to its voxel. Integer sums make this exact.
+    fn flush_run(&mut self, f: &mut Frame) {
+        if f.run.n > 0 {
+            if let Some(v) = self.voxels.slots.get_mut(f.run.slot) {
+                v.merge(&f.run);
+            }
+        }
+        f.run = Run::EMPTY;
+    }
+
     fn finish(&mut self, mut f: Frame) -> FrameReport {
+        self.flush_run(&mut f);
         let head = self.sort_frame_list(f.head);
         let cfg = self.config;
         let (lo, hi) = (to_fixed(cfg.clamp_min), to_fixed(cfg.clamp_max));
@@ -494,10 +572,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         }
 
         // Phase 3: rays in sorted order.
-        let mut cache = GaussCache {
-            tags: [0; 32],
-            entries: [None; 32],
-        };
+        let mut cache = GaussCache::new();
         let mut i = head;
         while i != NIL {
             let bs = (i - 1) as usize;
@@ -586,19 +661,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             if let Some(vs) = self.voxels.find(key.packed()) {
                 let v = &self.voxels.slots[vs];
                 if v.n >= cfg.n_min {
-                    let slot = vs & 31;
-                    let tag = vs as u32 + 1;
-                    let g = match cache.entries[slot] {
-                        Some(g) if cache.tags[slot] == tag => g,
-                        _ => {
-                            let g = v
-                                .gaussian(cfg.cell_size, cfg.quant_step())
-                                .prepare(cfg.eigen_ratio, floor_abs(cfg.cell_size));
-                            cache.tags[slot] = tag;
-                            cache.entries[slot] = Some(g);
-                            g
-                        }
-                    };
+                    let g = cache.get(vs, v, cfg);
                     match ndt_om_miss(cfg, ray, &g) {
                         Some(l) => delta = to_fixed(l),
                         None => return,

@@ -34,10 +34,11 @@ impl VoxelKey {
     /// assert!(sndt_core::VoxelKey::from_point(&[1e9, 0.0, 0.0], 0.1).is_none());
     /// ```
     pub fn from_point(p: &[f32; 3], h: f32) -> Option<VoxelKey> {
+        let inv = 1.0 / h;
         Some(VoxelKey {
-            x: axis_key(p[0] / h)?,
-            y: axis_key(p[1] / h)?,
-            z: axis_key(p[2] / h)?,
+            x: axis_key(p[0] * inv)?,
+            y: axis_key(p[1] * inv)?,
+            z: axis_key(p[2] * inv)?,
         })
     }
 
@@ -111,16 +112,23 @@ impl VoxelKey {
     }
 }
 
-/// Floor of a scaled coordinate as a key component, if in range.
+/// Floor of a scaled coordinate (`p / h`, computed as `p * (1 / h)` everywhere) as a key
+/// component, if in range; `None` for NaN.
+#[inline]
 pub(crate) fn axis_key(s: f32) -> Option<i16> {
-    if !s.is_finite() {
+    // Written so that NaN fails the comparison.
+    if !(s >= -(KEY_LIMIT as f32) && s < (KEY_LIMIT + 1) as f32) {
         return None;
     }
-    let f = libm::floorf(s);
-    if f < -(KEY_LIMIT as f32) || f > KEY_LIMIT as f32 {
-        return None;
-    }
-    Some(f as i16)
+    Some(floor_i32(s) as i16)
+}
+
+/// `floor` for finite values well inside the `i32` range, without a libm call (exact:
+/// truncation toward zero, corrected for negative non-integers).
+#[inline]
+pub(crate) fn floor_i32(s: f32) -> i32 {
+    let i = s as i32;
+    i - ((i as f32 > s) as i32)
 }
 
 fn pack(x: i32, y: i32, z: i32) -> u64 {

@@ -9,10 +9,11 @@
 //! `t = t* - sqrt((r^2 - D2) / a)`. Ellipsoids that contain the origin are skipped.
 
 use crate::block::Block;
-use crate::integrate::{floor_abs, Pinhole};
+use crate::integrate::Pinhole;
 use crate::key::VoxelKey;
 use crate::map::{argmax, Map};
 use crate::table::Table;
+use crate::voxel::PrepCache;
 use crate::Error;
 use nalgebra::{Isometry3, Point3, Vector3};
 
@@ -49,6 +50,16 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// assert!(map.raycast(&Point3::new(0.05, 0.05, 0.0), &-Vector3::z(), 3.0).is_none());
     /// ```
     pub fn raycast(&self, origin: &Point3<f32>, dir: &Vector3<f32>, max_t: f32) -> Option<RayHit> {
+        self.raycast_cached(&mut PrepCache::<8>::new(), origin, dir, max_t)
+    }
+
+    fn raycast_cached<const N: usize>(
+        &self,
+        cache: &mut PrepCache<N>,
+        origin: &Point3<f32>,
+        dir: &Vector3<f32>,
+        max_t: f32,
+    ) -> Option<RayHit> {
         let n = dir.norm();
         let finite = origin.coords.iter().all(|x| x.is_finite());
         if !(finite && n.is_finite() && n > 0.0 && max_t > 0.0) {
@@ -58,7 +69,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let cfg = &self.config;
         let h = cfg.cell_size;
         let start = self.voxel_key(&[origin.x, origin.y, origin.z])?;
-        let o = [origin.x / h, origin.y / h, origin.z / h];
+        let inv = 1.0 / h;
+        let o = [origin.x * inv, origin.y * inv, origin.z * inv];
         let mut k = [start.x as i32, start.y as i32, start.z as i32];
         let mut step = [0i32; 3];
         let mut t_max = [f32::INFINITY; 3];
@@ -76,7 +88,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         }
         let mut probe = Probe {
             blocks: &self.blocks,
-            cache: (0, 0),
+            cache,
+            block_cache: [(0, 0); 8],
             best: None,
             origin: Vector3::new(origin.x, origin.y, origin.z),
             u,
@@ -123,22 +136,26 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         probe.best
     }
 
-    fn examine(&self, p: &mut Probe<'_, B>, k: [i32; 3]) {
+    fn examine<const N: usize>(&self, p: &mut Probe<'_, B, N>, k: [i32; 3]) {
         let Some(key) = VoxelKey::from_ints(k[0], k[1], k[2]) else {
             return;
         };
         let packed = key.block();
-        let bs = if p.cache.0 == packed {
-            p.cache.1
+        // Blocks of a 2x2x2 neighbourhood differ in the parity of some coordinate, so a
+        // cache indexed by the three parity bits never thrashes inside one (misses too).
+        let i = (((k[0] >> 2) & 1) | (((k[1] >> 2) & 1) << 1) | (((k[2] >> 2) & 1) << 2)) as usize;
+        let (tag, found) = p.block_cache[i];
+        let found = if tag == packed {
+            found
         } else {
-            match p.blocks.find(packed) {
-                Some(bs) => {
-                    p.cache = (packed, bs);
-                    bs
-                }
-                None => return,
-            }
+            let f = p.blocks.find(packed).map_or(0, |s| s as u32 + 1);
+            p.block_cache[i] = (packed, f);
+            f
         };
+        if found == 0 {
+            return;
+        }
+        let bs = (found - 1) as usize;
         let b = &p.blocks.slots[bs];
         let cell = key.cell();
         if b.surface & (1u64 << cell) == 0 || b.cells[cell as usize] <= 0 {
@@ -152,9 +169,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         if v.n < cfg.n_min {
             return;
         }
-        let g = v
-            .gaussian(cfg.cell_size, cfg.quant_step())
-            .prepare(cfg.eigen_ratio, floor_abs(cfg.cell_size));
+        let g = p.cache.get(vs, v, cfg);
         let d = p.origin - g.mean;
         let w = g.inv * p.u;
         let a = p.u.dot(&w);
@@ -222,10 +237,12 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let rot = pose.rotation.to_rotation_matrix();
         let origin = Point3::from(t);
         let w = camera.width as usize;
+        // Neighbouring pixels examine the same voxels: keep their prepared Gaussians.
+        let mut cache = PrepCache::<128>::new();
         for (i, (l, d)) in labels.iter_mut().zip(distance.iter_mut()).enumerate() {
             let r = camera.ray((i % w) as u32, (i / w) as u32);
             let dir = rot * Vector3::new(r[0], r[1], r[2]);
-            match self.raycast(&origin, &dir, self.config.max_range) {
+            match self.raycast_cached(&mut cache, &origin, &dir, self.config.max_range) {
                 Some(hit) => {
                     *l = hit.class;
                     *d = hit.t;
@@ -240,9 +257,11 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 }
 
-struct Probe<'a, const B: usize> {
+struct Probe<'a, const B: usize, const N: usize> {
     blocks: &'a Table<Block, B>,
-    cache: (u64, usize),
+    cache: &'a mut PrepCache<N>,
+    /// `(packed block key, slot + 1 or 0 when absent)` by coordinate parity.
+    block_cache: [(u64, u32); 8],
     best: Option<RayHit>,
     origin: Vector3<f32>,
     u: Vector3<f32>,

@@ -71,8 +71,8 @@ impl<const C: usize> Voxel<C> {
         VoxelKey::unpack(self.packed_key())
     }
 
-    /// Adds one quantised offset.
-    #[inline]
+    /// Adds one quantised offset (integration sums runs of points instead, see `Run`).
+    #[cfg(test)]
     pub(crate) fn add(&mut self, q: [i32; 3]) {
         self.n += 1;
         self.s1[0] += q[0];
@@ -84,6 +84,17 @@ impl<const C: usize> Voxel<C> {
         self.s2[3] += q[1] * q[1];
         self.s2[4] += q[1] * q[2];
         self.s2[5] += q[2] * q[2];
+    }
+
+    /// Adds a run of points summed elsewhere.
+    pub(crate) fn merge(&mut self, run: &crate::integrate::Run) {
+        self.n += run.n;
+        for i in 0..3 {
+            self.s1[i] += run.s1[i];
+        }
+        for i in 0..6 {
+            self.s2[i] += run.s2[i];
+        }
     }
 
     /// Halves count and sums until `n <= n_max` (rounding halves away from zero for the
@@ -185,6 +196,44 @@ pub struct Gaussian {
 pub(crate) struct Prepared {
     pub(crate) mean: Vector3<f32>,
     pub(crate) inv: Matrix3<f32>,
+}
+
+/// Direct-mapped cache of prepared Gaussians keyed by voxel slot. Only valid while the
+/// voxels it was filled from do not change (phase 3 of a frame, one render call).
+pub(crate) struct PrepCache<const N: usize> {
+    tags: [u32; N],
+    entries: [Option<Prepared>; N],
+}
+
+impl<const N: usize> PrepCache<N> {
+    pub(crate) const fn new() -> Self {
+        PrepCache {
+            tags: [0; N],
+            entries: [None; N],
+        }
+    }
+
+    /// The prepared Gaussian of voxel `v` in slot `slot`.
+    pub(crate) fn get<const C: usize>(
+        &mut self,
+        slot: usize,
+        v: &Voxel<C>,
+        cfg: &crate::Config,
+    ) -> Prepared {
+        let i = slot % N;
+        let tag = slot as u32 + 1;
+        if let Some(g) = self.entries[i] {
+            if self.tags[i] == tag {
+                return g;
+            }
+        }
+        let g = v
+            .gaussian(cfg.cell_size, cfg.quant_step())
+            .prepare(cfg.eigen_ratio, crate::integrate::floor_abs(cfg.cell_size));
+        self.tags[i] = tag;
+        self.entries[i] = Some(g);
+        g
+    }
 }
 
 impl Gaussian {

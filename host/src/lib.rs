@@ -4,6 +4,9 @@
 //! draws it. This crate grows module by module (datasets, reference, evaluation,
 //! baselines, experiments); the core stays `no_std`.
 
+pub mod colors;
+pub mod eval;
+pub mod picture;
 pub mod room;
 
 use sndt_core::{Config, Map};
@@ -28,4 +31,16 @@ pub fn boxed_map<const V: usize, const B: usize, const C: usize>(
         .expect("spawning the map allocation thread")
         .join()
         .map_err(|_| sndt_core::Error::InvalidConfig)
+}
+
+/// A progress bar on stderr (hidden when stderr is not a terminal, e.g. in CI logs).
+pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(len);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{msg:>14} [{bar:40}] {pos}/{len} {elapsed}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_message(what.to_string());
+    bar
 }
