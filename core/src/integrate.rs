@@ -12,6 +12,7 @@
 
 use crate::block::Block;
 use crate::config::{to_fixed, MissModel};
+use crate::dda::Dda;
 use crate::key::{axis_key, floor_i32, VoxelKey};
 use crate::map::Map;
 use crate::table::{Entry, NIL};
@@ -746,42 +747,21 @@ fn traverse(
     mut visit: impl FnMut([i32; 3]),
 ) {
     let d = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
-    let mut k = start;
-    let mut step = [0i32; 3];
-    let mut t_max = [f32::INFINITY; 3];
-    let mut t_delta = [f32::INFINITY; 3];
-    for a in 0..3 {
-        if d[a] > 0.0 {
-            step[a] = 1;
-            t_delta[a] = 1.0 / d[a];
-            t_max[a] = (k[a] as f32 + 1.0 - o[a]) / d[a];
-        } else if d[a] < 0.0 {
-            step[a] = -1;
-            t_delta[a] = -1.0 / d[a];
-            t_max[a] = (k[a] as f32 - o[a]) / d[a];
-        }
-    }
-    let steps: u32 = (0..3).map(|a| (end[a] - k[a]).unsigned_abs()).sum();
+    let mut dda = Dda::new(o, d, start);
+    let steps: u32 = (0..3).map(|a| (end[a] - start[a]).unsigned_abs()).sum();
     for _ in 0..=steps {
-        if k == end {
+        if dda.k == end {
             if include_end {
-                visit(k);
+                visit(end);
             }
             return;
         }
-        visit(k);
-        let mut a = 0;
-        if t_max[1] < t_max[a] {
-            a = 1;
-        }
-        if t_max[2] < t_max[a] {
-            a = 2;
-        }
-        if t_max[a] > 1.0 + 1e-4 {
+        visit(dda.k);
+        let (a, t) = dda.next_axis();
+        if t > 1.0 + 1e-4 {
             return;
         }
-        k[a] += step[a];
-        t_max[a] += t_delta[a];
+        dda.advance(a);
     }
 }
 

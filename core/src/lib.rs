@@ -58,6 +58,7 @@
 mod block;
 mod config;
 mod crc;
+mod dda;
 mod integrate;
 mod key;
 mod map;

@@ -9,6 +9,7 @@
 //! `t = t* - sqrt((r^2 - D2) / a)`. Ellipsoids that contain the origin are skipped.
 
 use crate::block::Block;
+use crate::dda::Dda;
 use crate::integrate::Pinhole;
 use crate::key::VoxelKey;
 use crate::map::{argmax, Map};
@@ -71,21 +72,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let start = self.voxel_key(&[origin.x, origin.y, origin.z])?;
         let inv = 1.0 / h;
         let o = [origin.x * inv, origin.y * inv, origin.z * inv];
-        let mut k = [start.x as i32, start.y as i32, start.z as i32];
-        let mut step = [0i32; 3];
-        let mut t_max = [f32::INFINITY; 3];
-        let mut t_delta = [f32::INFINITY; 3];
-        for a in 0..3 {
-            if u[a] > 0.0 {
-                step[a] = 1;
-                t_delta[a] = 1.0 / u[a];
-                t_max[a] = (k[a] as f32 + 1.0 - o[a]) / u[a];
-            } else if u[a] < 0.0 {
-                step[a] = -1;
-                t_delta[a] = -1.0 / u[a];
-                t_max[a] = (k[a] as f32 - o[a]) / u[a];
-            }
-        }
+        let k = [start.x as i32, start.y as i32, start.z as i32];
+        let mut dda = Dda::new(o, [u.x, u.y, u.z], k);
         let mut probe = Probe {
             blocks: &self.blocks,
             cache,
@@ -104,14 +92,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         }
         let max_steps = (max_t / h) as u32 * 3 + 12;
         for _ in 0..max_steps {
-            let mut a = 0;
-            if t_max[1] < t_max[a] {
-                a = 1;
-            }
-            if t_max[2] < t_max[a] {
-                a = 2;
-            }
-            let t_enter = t_max[a] * h;
+            let (a, t) = dda.next_axis();
+            let t_enter = t * h;
             if t_enter > max_t + 2.5 * h {
                 break;
             }
@@ -120,13 +102,13 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                     break;
                 }
             }
-            k[a] += step[a];
-            t_max[a] += t_delta[a];
+            dda.advance(a);
+            // Only the 9 cells of the neighbourhood's new face are unseen.
             let (b, c) = ((a + 1) % 3, (a + 2) % 3);
             for db in -1..=1 {
                 for dc in -1..=1 {
-                    let mut cell = k;
-                    cell[a] += step[a];
+                    let mut cell = dda.k;
+                    cell[a] += dda.step(a);
                     cell[b] += db;
                     cell[c] += dc;
                     self.examine(&mut probe, cell);

@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# The whole test suite: formatting, lints, docs, the no_std build for Cortex-M4F, and every
+# test (unit, property, integration, doc). Installs what it needs; idempotent.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+step() { printf '\n==> %s\n' "$*"; }
+
+step "toolchain components and targets"
+rustup component add rustfmt clippy >/dev/null 2>&1 || true
+if ! rustup target list --installed | grep -qx thumbv7em-none-eabihf; then
+    rustup target add thumbv7em-none-eabihf
+fi
+
+step "cargo fmt --check"
+cargo fmt --all -- --check
+
+step "cargo clippy -D warnings"
+cargo clippy --workspace --all-targets -- -D warnings
+cargo clippy -p sndt-core --target thumbv7em-none-eabihf --features defmt -- -D warnings
+
+step "sndt-core builds for thumbv7em-none-eabihf (no_std, no alloc)"
+cargo build -p sndt-core --target thumbv7em-none-eabihf --release
+cargo build -p sndt-core --target thumbv7em-none-eabihf --release --features defmt
+
+step "cargo doc without warnings"
+RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --quiet
+
+step "cargo test (workspace: unit, property, integration, doc tests)"
+cargo test --workspace
