@@ -25,7 +25,7 @@ pub enum MissModel {
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Config {
-    /// Voxel edge `h` in metres. Default 0.10.
+    /// Voxel edge `h` in metres, in `[0.001, 100]`. Default 0.10.
     pub cell_size: f32,
     /// Point offsets inside a voxel are quantised to `h / 2^quant_bits`. Default 6
     /// (1.56 mm at 10 cm). At most [`Config::MAX_QUANT_BITS`] so the integer sums provably
@@ -33,22 +33,24 @@ pub struct Config {
     pub quant_bits: u8,
     /// Points needed before a voxel's Gaussian is valid. Default 3 (at least 2).
     pub n_min: u32,
-    /// Eigenvalues below `eigen_ratio * lambda_max` are raised to it before inversion.
-    /// Default 1e-3.
+    /// Eigenvalues below `eigen_ratio * lambda_max` (and below `(h / 1000)^2`, for voxels
+    /// whose points coincide) are raised to it before inversion. Default 1e-3.
     pub eigen_ratio: f32,
     /// Point cap: when a voxel holds more than `n_max` points at the end of a frame, its
     /// count and sums are halved until they fit (old data decays). Default 2048,
     /// range `[n_min, 65535]`.
     pub n_max: u32,
-    /// Log-odds added once per frame to a voxel that received points. Default 0.85 (p = 0.7).
+    /// Log-odds added once per frame to a voxel that received points, in `[0, 30]`.
+    /// Default 0.85 (p = 0.7).
     pub hit: f32,
-    /// Log-odds of a constant miss. Default -0.4 (p = 0.4).
+    /// Log-odds of a constant miss, in `[-30, 0]`. Default -0.4 (p = 0.4).
     pub miss: f32,
     /// Lower log-odds clamp. Default -2.0.
     pub clamp_min: f32,
     /// Upper log-odds clamp. Default 3.5.
     pub clamp_max: f32,
-    /// NDT-OM miss weight `lambda` in `p = 0.5 - lambda pN (1 - pz)`. Default 0.1.
+    /// NDT-OM miss weight `lambda` in `p = 0.5 - lambda pN (1 - pz)`, in `[0, 0.49]` so
+    /// that `p > 0`. Default 0.1.
     pub lambda: f32,
     /// Sensor range noise `sigma = noise_base + noise_quadratic * range^2` in metres, used
     /// by NDT-OM misses. Defaults 0.02 and 0.0025 (0.06 m at 4 m).
@@ -119,36 +121,29 @@ impl Config {
     /// c.cell_size = f32::NAN;
     /// assert_eq!(c.validate(), Err(sndt_core::Error::InvalidConfig));
     /// ```
-    pub fn validate(&self) -> Result<(), Error> {
-        let finite_pos = |x: f32| x.is_finite() && x > 0.0;
-        let ok = finite_pos(self.cell_size)
-            && self.cell_size <= 100.0
+    pub const fn validate(&self) -> Result<(), Error> {
+        const fn within(x: f32, lo: f32, hi: f32) -> bool {
+            // False for NaN.
+            x >= lo && x <= hi
+        }
+        let ok = within(self.cell_size, 1e-3, 100.0)
             && self.quant_bits >= 1
             && self.quant_bits <= Self::MAX_QUANT_BITS
             && self.n_min >= 2
             && self.n_max >= self.n_min
             && self.n_max <= 65535
-            && finite_pos(self.eigen_ratio)
-            && self.eigen_ratio < 1.0
-            && self.hit.is_finite()
-            && self.hit >= 0.0
-            && self.miss.is_finite()
-            && self.miss <= 0.0
-            && self.clamp_min.is_finite()
-            && self.clamp_max.is_finite()
-            && self.clamp_min <= 0.0
-            && self.clamp_max >= 0.0
-            && self.clamp_min >= -30.0
-            && self.clamp_max <= 30.0
-            && self.lambda.is_finite()
-            && (0.0..=0.5).contains(&self.lambda)
-            && finite_pos(self.noise_base)
-            && self.noise_quadratic.is_finite()
-            && self.noise_quadratic >= 0.0
-            && finite_pos(self.max_range)
+            && within(self.eigen_ratio, 1e-9, 0.5)
+            && within(self.hit, 0.0, 30.0)
+            && within(self.miss, -30.0, 0.0)
+            && within(self.clamp_min, -30.0, 0.0)
+            && within(self.clamp_max, 0.0, 30.0)
+            && within(self.lambda, 0.0, 0.49)
+            && within(self.noise_base, 1e-6, 1e3)
+            && within(self.noise_quadratic, 0.0, 1e3)
+            && within(self.max_range, 1e-3, 1e4)
             && self.top_k >= 1
             && self.top_k as usize <= crate::MAX_TOP_K
-            && finite_pos(self.render_radius);
+            && within(self.render_radius, 0.1, 10.0);
         if ok {
             Ok(())
         } else {
@@ -166,7 +161,13 @@ impl Default for Config {
 /// Fixed-point scale of log-odds: one natural log-odds unit is `LOGODDS_ONE` in an `i16`.
 pub const LOGODDS_ONE: f32 = 1024.0;
 
-/// Converts natural log-odds to the map's fixed point (round to nearest).
+/// Converts natural log-odds to the map's fixed point (round to nearest), clamped to
+/// +-64 so that adding it to an `i16` cell in `i32` can never overflow (NaN gives 0).
 pub(crate) fn to_fixed(l: f32) -> i32 {
+    let l = if l.is_nan() {
+        0.0
+    } else {
+        l.clamp(-64.0, 64.0)
+    };
     libm::roundf(l * LOGODDS_ONE) as i32
 }

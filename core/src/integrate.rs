@@ -93,8 +93,9 @@ impl Pinhole {
         ok(self.fx) && ok(self.fy) && self.cx.is_finite() && self.cy.is_finite()
     }
 
-    pub(crate) fn pixels(&self) -> usize {
-        self.width as usize * self.height as usize
+    /// `width * height`, or `None` when it overflows `usize` (16-bit/32-bit targets).
+    pub(crate) fn pixels(&self) -> Option<usize> {
+        (self.width as usize).checked_mul(self.height as usize)
     }
 }
 
@@ -192,6 +193,8 @@ struct Frame {
     block_cache: (u64, usize),
     voxel_cache: (u64, usize),
     run: Run,
+    voxels_exhausted: bool,
+    blocks_exhausted: bool,
     report: FrameReport,
     evicted_before: (u64, u64),
 }
@@ -273,7 +276,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         image: &DepthImage<'_>,
     ) -> Result<FrameReport, Error> {
         let cam = &image.camera;
-        let n = cam.pixels();
+        let n = cam.pixels().ok_or(Error::InvalidImage)?;
         let labels_ok = match image.labels {
             LabelImage::None => true,
             LabelImage::Top1(l) => l.len() == n,
@@ -332,9 +335,10 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         }
         .ok_or(Error::PoseOutOfRange)?;
 
-        // Frame stamps run 1..=65535; on wrap-around, forget all old stamps.
+        // Frame stamps run 1..=65535; whenever they start over (also when the u32 frame
+        // count wraps, or after loading a snapshot), forget all old stamps.
         let stamp = (self.stats.frames % 65535) as u16 + 1;
-        if stamp == 1 && self.stats.frames > 0 {
+        if stamp == 1 {
             for b in self.blocks.slots.iter_mut() {
                 b.stamp = 0;
             }
@@ -360,6 +364,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             block_cache: (0, 0),
             voxel_cache: (0, 0),
             run: Run::EMPTY,
+            voxels_exhausted: false,
+            blocks_exhausted: false,
             report: FrameReport::default(),
             evicted_before: (self.stats.voxels_evicted, self.stats.blocks_evicted),
         })
@@ -499,8 +505,10 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     fn create_voxel(&mut self, f: &mut Frame, key: &VoxelKey) -> Option<usize> {
-        if self.voxels.is_full() {
-            self.evict_voxels(&f.origin_key, f.stamp);
+        if self.voxels.is_full() && !f.voxels_exhausted {
+            // Within a frame the evictable set only shrinks: once a scan finds nothing,
+            // later inserts of this frame skip the O(capacity) scan.
+            f.voxels_exhausted = self.evict_voxels(&f.origin_key, f.stamp) == 0;
             f.voxel_cache = (0, 0);
         }
         let vs = self.voxels.insert(Voxel::new(key)).ok()?;
@@ -517,8 +525,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let bs = match self.blocks.find(packed) {
             Some(bs) => bs,
             None => {
-                if self.blocks.is_full() {
-                    self.evict_blocks(&f.origin_key, f.stamp);
+                if self.blocks.is_full() && !f.blocks_exhausted {
+                    f.blocks_exhausted = self.evict_blocks(&f.origin_key, f.stamp) == 0;
                     f.voxel_cache = (0, 0);
                 }
                 let bs = self.blocks.insert(Block::new(packed)).ok()?;
@@ -647,7 +655,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             return;
         };
         let Some(bs) = self.frame_block(f, key.block(), false) else {
-            f.report.dropped_misses += 1;
+            f.report.dropped_misses = f.report.dropped_misses.saturating_add(1);
             return;
         };
         let cell = key.cell();

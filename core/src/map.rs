@@ -152,18 +152,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     const fn checked(mut self) -> Self {
-        // `Config::validate` is not const; check the fields that would break invariants.
-        let c = &self.config;
-        let bad = !(c.quant_bits >= 1
-            && c.quant_bits <= Config::MAX_QUANT_BITS
-            && c.n_min >= 2
-            && c.n_max >= c.n_min
-            && c.n_max <= 65535
-            && c.top_k >= 1
-            && c.top_k as usize <= crate::MAX_TOP_K
-            && c.cell_size > 0.0
-            && c.cell_size <= 100.0);
-        if bad {
+        if self.config.validate().is_err() {
             self.config = Config::DEFAULT;
         }
         self

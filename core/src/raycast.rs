@@ -90,7 +90,9 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 }
             }
         }
-        let max_steps = (max_t / h) as u32 * 3 + 12;
+        // No ray can walk farther than across the whole key range.
+        let max_t = max_t.min(h * 4.0 * (crate::KEY_LIMIT + 1) as f32);
+        let max_steps = ((max_t / h) as u32).saturating_mul(3).saturating_add(12);
         for _ in 0..max_steps {
             let (a, t) = dda.next_axis();
             let t_enter = t * h;
@@ -205,7 +207,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         labels: &mut [u8],
         distance: &mut [f32],
     ) -> Result<(), Error> {
-        let n = camera.pixels();
+        let n = camera.pixels().ok_or(Error::InvalidImage)?;
         if !camera.valid() || labels.len() != n || distance.len() != n {
             return Err(Error::InvalidImage);
         }

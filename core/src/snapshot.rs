@@ -277,7 +277,9 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         c.top_k = r.u8();
         c.min_score = r.u8();
         let model = r.u8();
-        let _pad = r.u32();
+        if r.u32() != 0 {
+            return Err(Error::SnapshotCorrupt); // reserved bytes
+        }
         let frames = r.u32();
         let nb = r.u32() as usize;
         let nv = r.u32() as usize;
@@ -322,13 +324,29 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 return Err(Error::SnapshotCorrupt);
             }
             last = Some(order(k));
-            for _ in 0..64 {
+            // Blocks at coordinate -8192 hold one layer of cells at key -32768, outside
+            // the key range: those cells must stay empty.
+            let mut outside = 0u64;
+            for axis in 0..3 {
+                if ((k >> (32 - 16 * axis)) & 0xffff) as i32 - 32768 == -(KEY_LIMIT + 1) / 4 {
+                    for cell in 0..64u32 {
+                        if (cell >> (2 * axis)) & 3 == 0 {
+                            outside |= 1 << cell;
+                        }
+                    }
+                }
+            }
+            for cell in 0..64 {
                 let l = r.i16() as i32;
-                if l < lo || l > hi {
+                if l < lo || l > hi || (l != 0 && outside & (1 << cell) != 0) {
                     return Err(Error::SnapshotCorrupt);
                 }
             }
-            surface_bits += r.u64().count_ones() as usize;
+            let surface = r.u64();
+            if surface & outside != 0 {
+                return Err(Error::SnapshotCorrupt);
+            }
+            surface_bits += surface.count_ones() as usize;
         }
         if surface_bits != nv {
             return Err(Error::SnapshotCorrupt);
@@ -359,13 +377,33 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             for x in s2.iter_mut() {
                 *x = r.i32() as i64;
             }
-            let _hist = r.take::<0>();
-            r.pos += C;
+            r.pos += C; // any histogram is valid
             let bound1 = n * qhalf;
             let bound2 = n * qhalf * qhalf;
-            if s1.iter().any(|x| x.abs() > bound1)
-                || s2.iter().any(|x| x.abs() > bound2)
-                || [s2[0], s2[3], s2[5]].iter().any(|&d| d < 0)
+            if s1.iter().any(|x| x.abs() > bound1) || s2.iter().any(|x| x.abs() > bound2) {
+                return Err(Error::SnapshotCorrupt);
+            }
+            // Sums of real points give a positive semi-definite scatter matrix
+            // M = n S2 - S1 S1^T: non-negative diagonal and Cauchy-Schwarz off-diagonal.
+            let idx = [
+                (0, 0, 0),
+                (0, 1, 1),
+                (0, 2, 2),
+                (1, 1, 3),
+                (1, 2, 4),
+                (2, 2, 5),
+            ];
+            let mut m = [0i128; 6];
+            for (e, &(i, j, s)) in m.iter_mut().zip(idx.iter()) {
+                *e = (n * s2[s] - s1[i] * s1[j]) as i128;
+            }
+            let (dx, dy, dz) = (m[0], m[3], m[5]);
+            if dx < 0
+                || dy < 0
+                || dz < 0
+                || m[1] * m[1] > dx * dy
+                || m[2] * m[2] > dx * dz
+                || m[4] * m[4] > dy * dz
             {
                 return Err(Error::SnapshotCorrupt);
             }

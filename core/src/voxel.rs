@@ -1,11 +1,12 @@
 //! Voxel statistics: integer-quantised point sums, the Gaussian they define, and the `u8`
 //! class histogram.
 //!
-//! A point `p` in voxel `k` contributes `q = round((p / h - k - 1/2) 2^Q)` (so
-//! `|q_i| <= 2^(Q-1)`) to `S1 = sum q` and `S2 = sum q q^T`. With `n <= n_max +`
-//! [`crate::MAX_FRAME_POINTS`] `<= 2^21` and `Q <= 6`, `|S1_i| <= 2^26` and
-//! `|S2_ij| <= 2^21 * 2^10 = 2^31 - 2^21 ...` fit an `i32` (see `sums_cannot_overflow` in the
-//! tests), so the sums are exact and independent of point order.
+//! A point `p` in voxel `k` contributes `q = round_half_up((p / h - k - 1/2) 2^Q)` (so
+//! `|q_i| <= 2^(Q-1)`) to `S1 = sum q` and `S2 = sum q q^T`. A voxel holds at most `n_max`
+//! points between frames and one frame adds at most [`crate::MAX_FRAME_POINTS`], so with
+//! `n_max <= 65535` and `Q <= 6`: `n <= 65535 + 2^20`, `|S1_i| <= 2^5 n < 2^26` and
+//! `|S2_ij| <= 2^10 n = 1,140,849,664 < 2^31`: the sums fit `i32` exactly (see
+//! `sums_cannot_overflow` in the tests) and do not depend on point order.
 
 use crate::key::VoxelKey;
 use crate::table::Entry;
@@ -97,15 +98,29 @@ impl<const C: usize> Voxel<C> {
         }
     }
 
-    /// Halves count and sums until `n <= n_max` (rounding halves away from zero for the
-    /// sums so the mean is kept; `n` rounds up so it never reaches 0).
+    /// Halves the count (rounding up, so it never reaches 0) until `n <= n_max` and scales
+    /// the sums by the same factor `n' / n` (rounded to nearest in `i64`), so mean and
+    /// covariance are kept (old data decays).
     pub(crate) fn decay(&mut self, n_max: u32) {
-        while self.n > n_max {
-            self.n = self.n.div_ceil(2);
-            for s in self.s1.iter_mut().chain(self.s2.iter_mut()) {
-                *s = half_round(*s);
-            }
+        if self.n <= n_max {
+            return;
         }
+        let mut m = self.n;
+        while m > n_max {
+            m = m.div_ceil(2);
+        }
+        let (n, m) = (self.n as i64, m as i64);
+        for s in self.s1.iter_mut().chain(self.s2.iter_mut()) {
+            let v = *s as i64 * m;
+            // Round half away from zero; |v / n| <= |s|, so the result fits.
+            let r = if v >= 0 {
+                (2 * v + n) / (2 * n)
+            } else {
+                -((-2 * v + n) / (2 * n))
+            };
+            *s = r as i32;
+        }
+        self.n = m as u32;
     }
 
     /// Halves every bin if any bin exceeds 127 so the frame's votes have room
@@ -154,15 +169,6 @@ impl<const C: usize> Voxel<C> {
             covariance: cov,
             count: self.n,
         }
-    }
-}
-
-/// Rounds `s / 2` half away from zero.
-fn half_round(s: i32) -> i32 {
-    if s >= 0 {
-        (s + 1) >> 1
-    } else {
-        -((-s + 1) >> 1)
     }
 }
 
