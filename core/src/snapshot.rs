@@ -384,7 +384,10 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 return Err(Error::SnapshotCorrupt);
             }
             // Sums of real points give a positive semi-definite scatter matrix
-            // M = n S2 - S1 S1^T: non-negative diagonal and Cauchy-Schwarz off-diagonal.
+            // M = n S2 - S1 S1^T. Decay rounds each scaled sum on its own, which can push M
+            // below that by about n (qhalf + 1/2) per entry (and new points can at most
+            // double it before the next decay), so allow a slack of 2 n (qhalf + 1):
+            // anything beyond cannot come from this map.
             let idx = [
                 (0, 0, 0),
                 (0, 1, 1),
@@ -397,7 +400,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             for (e, &(i, j, s)) in m.iter_mut().zip(idx.iter()) {
                 *e = (n * s2[s] - s1[i] * s1[j]) as i128;
             }
-            let (dx, dy, dz) = (m[0], m[3], m[5]);
+            let slack = 2 * n as i128 * (qhalf as i128 + 1);
+            let (dx, dy, dz) = (m[0] + slack, m[3] + slack, m[5] + slack);
             if dx < 0
                 || dy < 0
                 || dz < 0

@@ -100,7 +100,9 @@ impl<const C: usize> Voxel<C> {
 
     /// Halves the count (rounding up, so it never reaches 0) until `n <= n_max` and scales
     /// the sums by the same factor `n' / n` (rounded to nearest in `i64`), so mean and
-    /// covariance are kept (old data decays).
+    /// covariance are kept (old data decays). Rounding each sum on its own may leave the
+    /// scatter matrix `n S2 - S1 S1^T` slightly indefinite (by about `n (2^(Q-1) + 1/2)`);
+    /// [`Voxel::gaussian`] clamps variances at 0 and the eigenvalue floor absorbs the rest.
     pub(crate) fn decay(&mut self, n_max: u32) {
         if self.n <= n_max {
             return;
@@ -158,7 +160,11 @@ impl<const C: usize> Voxel<C> {
             ];
             let scale = step * step / (self.n as f32 * (self.n - 1) as f32);
             for &(i, j, s) in idx.iter() {
-                let v = n64 * self.s2[s] as i64 - s1[i] * s1[j];
+                let mut v = n64 * self.s2[s] as i64 - s1[i] * s1[j];
+                if i == j {
+                    // Decay's rounding can leave a flat direction a hair below zero.
+                    v = v.max(0);
+                }
                 let f = v as f32 * scale;
                 cov[(i, j)] = f;
                 cov[(j, i)] = f;
