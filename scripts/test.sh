@@ -27,4 +27,8 @@ step "cargo doc without warnings"
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --quiet
 
 step "cargo test (workspace: unit, property, integration, doc tests)"
-cargo test --workspace
+log="$(mktemp)"
+trap 'rm -f "$log"' EXIT
+cargo test --workspace 2>&1 | tee "$log"
+# One closing line over all test binaries (cargo prints one summary per binary).
+awk '/^test result:/ { p += $4; f += $6 } END { printf "\nsndt: %d passed, %d failed\n", p, f }' "$log"
