@@ -92,3 +92,15 @@ impl Block {
         *c = (*c as i32 + delta).clamp(lo, hi) as i16;
     }
 }
+
+/// Indices of the set bits of a cell mask, lowest first.
+pub(crate) fn bits(mut mask: u64) -> impl Iterator<Item = u32> {
+    core::iter::from_fn(move || {
+        if mask == 0 {
+            return None;
+        }
+        let cell = mask.trailing_zeros();
+        mask &= mask - 1;
+        Some(cell)
+    })
+}

@@ -10,7 +10,7 @@
 //!    unique truncated end (end included), in sorted order, gives every traversed voxel at
 //!    most one miss.
 
-use crate::block::Block;
+use crate::block::{bits, Block};
 use crate::config::{to_fixed, MissModel};
 use crate::dda::Dda;
 use crate::key::{axis_key, floor_i32, VoxelKey};
@@ -208,7 +208,7 @@ pub(crate) struct Run {
 }
 
 impl Run {
-    const EMPTY: Run = Run {
+    pub(crate) const EMPTY: Run = Run {
         slot: usize::MAX,
         n: 0,
         s1: [0; 3],
@@ -216,7 +216,7 @@ impl Run {
     };
 
     #[inline]
-    fn add(&mut self, q: [i32; 3]) {
+    pub(crate) fn add(&mut self, q: [i32; 3]) {
         self.n += 1;
         self.s1[0] += q[0];
         self.s1[1] += q[1];
@@ -566,10 +566,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         while i != NIL {
             let bs = (i - 1) as usize;
             let b = self.blocks.slots[bs];
-            let mut mask = b.hit;
-            while mask != 0 {
-                let cell = mask.trailing_zeros();
-                mask &= mask - 1;
+            for cell in bits(b.hit) {
                 let key = VoxelKey::from_block_cell(b.packed_key(), cell);
                 if let Some(vs) = self.voxels.find(key.packed()) {
                     self.voxels.slots[vs].decay(cfg.n_max);
@@ -586,10 +583,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         while i != NIL {
             let bs = (i - 1) as usize;
             let b = self.blocks.slots[bs];
-            let mut mask = b.hit;
-            while mask != 0 {
-                let cell = mask.trailing_zeros();
-                mask &= mask - 1;
+            for cell in bits(b.hit) {
                 let key = VoxelKey::from_block_cell(b.packed_key(), cell);
                 let target = match self.voxels.find(key.packed()) {
                     Some(vs) => mean_in_voxel(&self.voxels.slots[vs], &key, f.qscale),
@@ -597,10 +591,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 };
                 self.cast(&mut f, &mut cache, target, &key, false);
             }
-            let mut mask = b.far & !b.hit;
-            while mask != 0 {
-                let cell = mask.trailing_zeros();
-                mask &= mask - 1;
+            for cell in bits(b.far & !b.hit) {
                 let key = VoxelKey::from_block_cell(b.packed_key(), cell);
                 self.cast(&mut f, &mut cache, centre(&key), &key, true);
             }

@@ -1,6 +1,6 @@
 //! The map: two fixed tables (occupancy blocks, NDT voxels), queries and eviction.
 
-use crate::block::Block;
+use crate::block::{bits, Block};
 use crate::config::{Config, LOGODDS_ONE};
 use crate::key::VoxelKey;
 use crate::table::{Entry, Table};
@@ -318,10 +318,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             if b.packed_key() == 0 || b.stamp == stamp || bin(dist(&b)) < threshold {
                 continue;
             }
-            let mut surface = b.surface;
-            while surface != 0 {
-                let cell = surface.trailing_zeros();
-                surface &= surface - 1;
+            for cell in bits(b.surface) {
                 let key = VoxelKey::from_block_cell(b.packed_key(), cell);
                 if let Some(v) = self.voxels.find(key.packed()) {
                     self.voxels.remove(v);

@@ -388,18 +388,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             // below that by about n (qhalf + 1/2) per entry (and new points can at most
             // double it before the next decay), so allow a slack of 2 n (qhalf + 1):
             // anything beyond cannot come from this map.
-            let idx = [
-                (0, 0, 0),
-                (0, 1, 1),
-                (0, 2, 2),
-                (1, 1, 3),
-                (1, 2, 4),
-                (2, 2, 5),
-            ];
-            let mut m = [0i128; 6];
-            for (e, &(i, j, s)) in m.iter_mut().zip(idx.iter()) {
-                *e = (n * s2[s] - s1[i] * s1[j]) as i128;
-            }
+            let m = crate::voxel::scatter(n, &s1, &s2).map(|x| x as i128);
             let slack = 2 * n as i128 * (qhalf as i128 + 1);
             let (dx, dy, dz) = (m[0] + slack, m[3] + slack, m[5] + slack);
             if dx < 0

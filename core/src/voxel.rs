@@ -75,16 +75,9 @@ impl<const C: usize> Voxel<C> {
     /// Adds one quantised offset (integration sums runs of points instead, see `Run`).
     #[cfg(test)]
     pub(crate) fn add(&mut self, q: [i32; 3]) {
-        self.n += 1;
-        self.s1[0] += q[0];
-        self.s1[1] += q[1];
-        self.s1[2] += q[2];
-        self.s2[0] += q[0] * q[0];
-        self.s2[1] += q[0] * q[1];
-        self.s2[2] += q[0] * q[2];
-        self.s2[3] += q[1] * q[1];
-        self.s2[4] += q[1] * q[2];
-        self.s2[5] += q[2] * q[2];
+        let mut run = crate::integrate::Run::EMPTY;
+        run.add(q);
+        self.merge(&run);
     }
 
     /// Adds a run of points summed elsewhere.
@@ -148,23 +141,13 @@ impl<const C: usize> Voxel<C> {
         let mut cov = Matrix3::zeros();
         if self.n >= 2 {
             // n S2 - S1 S1^T is exact in i64; one rounding to f32 afterwards.
-            let n64 = self.n as i64;
-            let s1 = [self.s1[0] as i64, self.s1[1] as i64, self.s1[2] as i64];
-            let idx = [
-                (0, 0, 0),
-                (0, 1, 1),
-                (0, 2, 2),
-                (1, 1, 3),
-                (1, 2, 4),
-                (2, 2, 5),
-            ];
+            let s1 = self.s1.map(|x| x as i64);
+            let s2 = self.s2.map(|x| x as i64);
+            let m = scatter(self.n as i64, &s1, &s2);
             let scale = step * step / (self.n as f32 * (self.n - 1) as f32);
-            for &(i, j, s) in idx.iter() {
-                let mut v = n64 * self.s2[s] as i64 - s1[i] * s1[j];
-                if i == j {
-                    // Decay's rounding can leave a flat direction a hair below zero.
-                    v = v.max(0);
-                }
+            for (&(i, j), &v) in S2_INDEX.iter().zip(m.iter()) {
+                // Decay's rounding can leave a flat direction a hair below zero.
+                let v = if i == j { v.max(0) } else { v };
                 let f = v as f32 * scale;
                 cov[(i, j)] = f;
                 cov[(j, i)] = f;
@@ -176,6 +159,19 @@ impl<const C: usize> Voxel<C> {
             count: self.n,
         }
     }
+}
+
+/// Matrix positions of the six stored `S2` entries: xx, xy, xz, yy, yz, zz.
+pub(crate) const S2_INDEX: [(usize, usize); 6] = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
+
+/// The scatter matrix `M = n S2 - S1 S1^T` (entries in `S2` order), exact in `i64`: `n` times
+/// the sum of squared deviations from the mean, positive semi-definite for real points.
+pub(crate) fn scatter(n: i64, s1: &[i64; 3], s2: &[i64; 6]) -> [i64; 6] {
+    let mut m = [0i64; 6];
+    for (e, (&(i, j), &s)) in m.iter_mut().zip(S2_INDEX.iter().zip(s2.iter())) {
+        *e = n * s - s1[i] * s1[j];
+    }
+    m
 }
 
 /// A voxel's normal distribution in world coordinates (metres).
