@@ -23,6 +23,10 @@ step "sndt-core builds for thumbv7em-none-eabihf (no_std, no alloc)"
 cargo build -p sndt-core --target thumbv7em-none-eabihf --release
 cargo build -p sndt-core --target thumbv7em-none-eabihf --release --features defmt
 
+step "Cortex-M4F firmware: fmt, clippy, build, size, run in QEMU"
+(cd targets/cortex-m4f && cargo fmt --check && cargo clippy --release --locked -- -D warnings)
+bash scripts/firmware.sh
+
 step "cargo doc without warnings"
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --quiet
 
