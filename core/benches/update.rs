@@ -4,7 +4,7 @@
 //! Each cell size maps the same 12 frames of a walk around the room into a fresh map; the
 //! first frame (all voxels new) and the steady state are reported separately.
 
-use sndt_core::{Config, DepthImage, DepthKind, LabelImage, Map};
+use sndt_core::{Config, Map};
 use sndt_host::room::{orbit, Scene, HYPERSIM_CAMERA};
 use std::time::Instant;
 
@@ -32,13 +32,7 @@ fn main() {
         let mut points = 0u64;
         let mut rays = 0u32;
         for (pose, (depth, labels)) in poses.iter().zip(&frames) {
-            let img = DepthImage {
-                camera: cam,
-                depth,
-                kind: DepthKind::Planar,
-                labels: LabelImage::Top1(labels),
-                stride: 1,
-            };
+            let img = sndt_host::room::depth_image(&cam, depth, labels);
             let t = Instant::now();
             let r = map.integrate_depth(pose, &img).expect("frame integrates");
             times.push(t.elapsed().as_secs_f64());

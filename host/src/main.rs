@@ -2,7 +2,7 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
-use sndt_core::{Config, DepthImage, DepthKind, LabelImage, MissModel};
+use sndt_core::{Config, MissModel};
 use sndt_host::colors::{render_color, NYU40};
 use sndt_host::eval::Confusion;
 use sndt_host::room::{orbit, Scene, HYPERSIM_CAMERA};
@@ -84,13 +84,7 @@ fn demo(a: &DemoArgs) -> Result<()> {
     let mut update = Vec::new();
     let mut points = 0u64;
     for (pose, (depth, labels)) in poses.iter().zip(&frames) {
-        let img = DepthImage {
-            camera: cam,
-            depth,
-            kind: DepthKind::Planar,
-            labels: LabelImage::Top1(labels),
-            stride: 1,
-        };
+        let img = sndt_host::room::depth_image(&cam, depth, labels);
         let t = Instant::now();
         let r = map
             .integrate_depth(pose, &img)

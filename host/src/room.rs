@@ -189,6 +189,21 @@ pub fn orbit(n: usize) -> Vec<Isometry3<f32>> {
         .collect()
 }
 
+/// A rendered frame (planar depth, top-1 labels, every pixel) as the core's depth image.
+pub fn depth_image<'a>(
+    cam: &Pinhole,
+    depth: &'a [f32],
+    labels: &'a [u8],
+) -> sndt_core::DepthImage<'a> {
+    sndt_core::DepthImage {
+        camera: *cam,
+        depth,
+        kind: sndt_core::DepthKind::Planar,
+        labels: sndt_core::LabelImage::Top1(labels),
+        stride: 1,
+    }
+}
+
 /// Points in the sensor frame for a rendered frame (pixels with depth), with labels.
 pub fn points(depth: &[f32], labels: &[u8], cam: &Pinhole) -> Vec<sndt_core::LabeledPoint> {
     let mut out = Vec::with_capacity(depth.len());
