@@ -5,8 +5,11 @@
 //! baselines, experiments); the core stays `no_std`.
 
 pub mod colors;
+pub mod dataset;
 pub mod eval;
+pub mod hypersim;
 pub mod picture;
+pub mod prepared;
 pub mod room;
 
 use sndt_core::{Config, Map};

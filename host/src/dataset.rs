@@ -1,0 +1,361 @@
+//! One frame type and one dataset interface for every source: our synthetic scenes, the
+//! prepared layout (ours and the authors' v0.3.1), raw Hypersim HDF5, plus ESANet top-k
+//! predictions beside any of them.
+//!
+//! Conventions, the same for every reader:
+//! - poses are camera-to-world, metres, world as the dataset defines it (z up for
+//!   Hypersim and ours), **OpenCV camera axes** (x right, y down, z forward);
+//! - pixel rays have unit z in that camera frame, so a planar depth `d` gives the point
+//!   `d * ray` and a Euclidean range `r` gives `r * ray / |ray|`;
+//! - depth `0`, NaN, inf or negative means "no measurement";
+//! - labels: `0` void, `1..=40` NYU40.
+
+use anyhow::{bail, Context, Result};
+use sndt_core::{DepthKind, Isometry3, LabeledPoint, Labels, Pinhole, Point3};
+use std::fmt;
+use std::path::Path;
+use std::sync::Arc;
+
+/// Identifies a frame as `<scene>/<cam>/<NNNN>` (the split-list line format).
+#[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct FrameId {
+    /// Scene name, e.g. `ai_001_010` or `synth_00_bedroom`.
+    pub scene: String,
+    /// Camera/trajectory name, e.g. `cam_00`.
+    pub cam: String,
+    /// Frame index within the trajectory.
+    pub index: u32,
+}
+
+impl FrameId {
+    /// Parses `scene/cam/NNNN` (surrounding whitespace ignored).
+    ///
+    /// ```
+    /// let id = sndt_host::dataset::FrameId::parse("ai_001_010/cam_00/0007").unwrap();
+    /// assert_eq!((id.scene.as_str(), id.cam.as_str(), id.index), ("ai_001_010", "cam_00", 7));
+    /// assert_eq!(id.to_string(), "ai_001_010/cam_00/0007");
+    /// assert!(sndt_host::dataset::FrameId::parse("ai_001_010/0007").is_err());
+    /// ```
+    pub fn parse(s: &str) -> Result<FrameId> {
+        let parts: Vec<&str> = s.trim().split('/').collect();
+        if parts.len() != 3 || parts[0].is_empty() || parts[1].is_empty() {
+            bail!("frame id {s:?} is not <scene>/<cam>/<NNNN>");
+        }
+        let index = parts[2]
+            .parse()
+            .with_context(|| format!("frame id {s:?}: frame number {:?}", parts[2]))?;
+        Ok(FrameId {
+            scene: parts[0].to_string(),
+            cam: parts[1].to_string(),
+            index,
+        })
+    }
+
+    /// `scene/cam`: the trajectory this frame belongs to.
+    pub fn trajectory(&self) -> String {
+        format!("{}/{}", self.scene, self.cam)
+    }
+
+    /// The file stem used by the prepared layout: `NNNN`.
+    pub fn stem(&self) -> String {
+        format!("{:04}", self.index)
+    }
+}
+
+impl fmt::Display for FrameId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}/{}/{:04}", self.scene, self.cam, self.index)
+    }
+}
+
+/// How pixels map to rays in the OpenCV camera frame.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Rays {
+    /// An ideal pinhole.
+    Pinhole(Pinhole),
+    /// One ray per pixel (row-major, unit z), e.g. Hypersim's tilt-shift cameras.
+    PerPixel {
+        /// Image width.
+        width: u32,
+        /// Image height.
+        height: u32,
+        /// `width * height` directions with z = 1.
+        dirs: Vec<[f32; 3]>,
+    },
+}
+
+impl Rays {
+    /// Image width.
+    pub fn width(&self) -> u32 {
+        match self {
+            Rays::Pinhole(p) => p.width,
+            Rays::PerPixel { width, .. } => *width,
+        }
+    }
+
+    /// Image height.
+    pub fn height(&self) -> u32 {
+        match self {
+            Rays::Pinhole(p) => p.height,
+            Rays::PerPixel { height, .. } => *height,
+        }
+    }
+
+    /// The ray (unit z) of pixel `(col, row)`.
+    ///
+    /// ```
+    /// use sndt_host::dataset::Rays;
+    /// let cam = sndt_core::Pinhole { fx: 2.0, fy: 2.0, cx: 1.0, cy: 1.0, width: 2, height: 2 };
+    /// assert_eq!(Rays::Pinhole(cam).ray(1, 1), [0.25, 0.25, 1.0]);
+    /// ```
+    pub fn ray(&self, col: u32, row: u32) -> [f32; 3] {
+        match self {
+            Rays::Pinhole(p) => p.ray(col, row),
+            Rays::PerPixel { width, dirs, .. } => dirs[(row * width + col) as usize],
+        }
+    }
+}
+
+/// Top-k predicted labels per pixel (ESANet style: best first, scores in 0..1).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TopK {
+    /// Classes per pixel, best first (1..=40; 0 = unused entry).
+    pub classes: Vec<[u8; 3]>,
+    /// Scores per pixel, matching `classes`.
+    pub scores: Vec<[f32; 3]>,
+}
+
+impl TopK {
+    /// The best class of every pixel.
+    pub fn top1(&self) -> Vec<u8> {
+        self.classes.iter().map(|c| c[0]).collect()
+    }
+
+    /// Pixel `i` as the core's labels (scores scaled to 0..=255).
+    pub fn labels(&self, i: usize) -> Labels {
+        let (c, s) = (self.classes[i], self.scores[i]);
+        let q = |x: f32| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
+        let pairs: Vec<(u8, u8)> = (0..3)
+            .filter(|&k| c[k] != 0)
+            .map(|k| (c[k], q(s[k])))
+            .collect();
+        Labels::top_k(&pairs)
+    }
+}
+
+/// Which labels to attach to points.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum LabelSource {
+    /// Ground-truth labels (void pixels add geometry only).
+    Gt,
+    /// Predicted top-1 labels.
+    Pred,
+    /// Predicted top-k labels with scores.
+    PredTopk,
+    /// No labels: geometry only.
+    None,
+}
+
+/// One frame of a dataset.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    /// Which frame.
+    pub id: FrameId,
+    /// Camera-to-world, metres, OpenCV camera axes.
+    pub pose: Isometry3<f32>,
+    /// Pixel rays (shared by the frames of one camera).
+    pub rays: Arc<Rays>,
+    /// Depth in metres, row-major; see `depth_kind`.
+    pub depth: Vec<f32>,
+    /// Planar depth or Euclidean range.
+    pub depth_kind: DepthKind,
+    /// Ground-truth labels (0 void, 1..=40), when the dataset has them.
+    pub labels: Option<Vec<u8>>,
+    /// Predicted top-k labels, when available.
+    pub predictions: Option<TopK>,
+}
+
+impl Frame {
+    /// Number of pixels.
+    pub fn pixels(&self) -> usize {
+        self.depth.len()
+    }
+
+    /// Planar depth (z in the camera frame) of pixel `i`, or `None` without a measurement.
+    pub fn planar_depth(&self, i: usize) -> Option<f32> {
+        let d = self.depth[i];
+        if !(d.is_finite() && d > 0.0) {
+            return None;
+        }
+        Some(match self.depth_kind {
+            DepthKind::Planar => d,
+            DepthKind::Range => {
+                let w = self.rays.width();
+                let r = self.rays.ray(i as u32 % w, i as u32 / w);
+                d / (r[0] * r[0] + r[1] * r[1] + 1.0).sqrt()
+            }
+        })
+    }
+
+    /// Planar depth image (0 where there is no measurement), as the evaluation's GT mask
+    /// and the prepared layout want it.
+    pub fn planar_depth_image(&self) -> Vec<f32> {
+        (0..self.pixels())
+            .map(|i| self.planar_depth(i).unwrap_or(0.0))
+            .collect()
+    }
+
+    /// The label of pixel `i` for `source`.
+    pub fn point_labels(&self, i: usize, source: LabelSource) -> Labels {
+        match source {
+            LabelSource::None => Labels::NONE,
+            LabelSource::Gt => match &self.labels {
+                Some(l) if l[i] != 0 => Labels::top1(l[i]),
+                _ => Labels::NONE,
+            },
+            LabelSource::Pred => match &self.predictions {
+                Some(p) if p.classes[i][0] != 0 => Labels::top1(p.classes[i][0]),
+                _ => Labels::NONE,
+            },
+            LabelSource::PredTopk => match &self.predictions {
+                Some(p) => p.labels(i),
+                None => Labels::NONE,
+            },
+        }
+    }
+
+    /// Measured points in the camera frame with labels from `source`, every `stride`-th
+    /// pixel in both directions.
+    pub fn camera_points(&self, source: LabelSource, stride: u32) -> Vec<LabeledPoint> {
+        let (w, h) = (self.rays.width(), self.rays.height());
+        let stride = stride.max(1);
+        let mut out = Vec::with_capacity(self.pixels() / (stride * stride) as usize);
+        for row in (0..h).step_by(stride as usize) {
+            for col in (0..w).step_by(stride as usize) {
+                let i = (row * w + col) as usize;
+                if let Some(z) = self.planar_depth(i) {
+                    let r = self.rays.ray(col, row);
+                    out.push(LabeledPoint::new(
+                        Point3::new(r[0] * z, r[1] * z, z),
+                        self.point_labels(i, source),
+                    ));
+                }
+            }
+        }
+        out
+    }
+
+    /// Measured points in world coordinates with their ground-truth label (0 when the
+    /// frame has none), every pixel.
+    pub fn world_points(&self) -> Vec<([f32; 3], u8)> {
+        let (w, h) = (self.rays.width(), self.rays.height());
+        let mut out = Vec::with_capacity(self.pixels());
+        for row in 0..h {
+            for col in 0..w {
+                let i = (row * w + col) as usize;
+                if let Some(z) = self.planar_depth(i) {
+                    let r = self.rays.ray(col, row);
+                    let p = self.pose * Point3::new(r[0] * z, r[1] * z, z);
+                    let l = self.labels.as_ref().map_or(0, |l| l[i]);
+                    out.push(([p.x, p.y, p.z], l));
+                }
+            }
+        }
+        out
+    }
+
+    /// Checks shapes and values: image sizes agree, the pose is finite, labels are
+    /// 0..=40. Readers call this so that a bad file fails where it is read.
+    pub fn validate(&self) -> Result<()> {
+        let n = self.rays.width() as usize * self.rays.height() as usize;
+        if self.depth.len() != n {
+            bail!("{}: depth has {} pixels, camera has {n}", self.id, self.depth.len());
+        }
+        if let Rays::PerPixel { dirs, .. } = self.rays.as_ref() {
+            if dirs.len() != n {
+                bail!("{}: {} rays for {n} pixels", self.id, dirs.len());
+            }
+        }
+        if let Some(l) = &self.labels {
+            if l.len() != n {
+                bail!("{}: labels have {} pixels, depth has {n}", self.id, l.len());
+            }
+            if let Some(bad) = l.iter().find(|&&c| c > 40) {
+                bail!("{}: label {bad} is outside 0..=40", self.id);
+            }
+        }
+        if let Some(p) = &self.predictions {
+            if p.classes.len() != n || p.scores.len() != n {
+                bail!("{}: predictions have {} pixels, depth has {n}", self.id, p.classes.len());
+            }
+        }
+        let t = self.pose.translation.vector;
+        let q = self.pose.rotation.coords;
+        if t.iter().chain(q.iter()).any(|x| !x.is_finite()) {
+            bail!("{}: pose is not finite", self.id);
+        }
+        Ok(())
+    }
+}
+
+/// A source of frames.
+pub trait Dataset: Send + Sync {
+    /// One line about what was opened (layout, split, frame count).
+    fn describe(&self) -> String;
+
+    /// All frames, ordered by trajectory then index.
+    fn frames(&self) -> &[FrameId];
+
+    /// Reads one frame.
+    fn load(&self, id: &FrameId) -> Result<Frame>;
+
+    /// Frames grouped by trajectory (`scene/cam`), in order.
+    fn trajectories(&self) -> Vec<(String, Vec<FrameId>)> {
+        let mut out: Vec<(String, Vec<FrameId>)> = Vec::new();
+        for id in self.frames() {
+            let t = id.trajectory();
+            match out.last_mut() {
+                Some((name, v)) if *name == t => v.push(id.clone()),
+                _ => out.push((t, vec![id.clone()])),
+            }
+        }
+        out
+    }
+}
+
+/// Options for [`open`].
+#[derive(Clone, Debug, Default)]
+pub struct OpenOptions {
+    /// Split name of the prepared layout (default `test`).
+    pub split: Option<String>,
+    /// Prepared layout: use the authors' v0.3.1 intrinsics (fx = 886.81, fy = 927.06) to
+    /// reproduce the paper, instead of the correct fy.
+    pub paper_fy: bool,
+    /// Directory of ESANet `.npy` predictions (`<dir>/<scene>/<cam>/<NNNN>.npy`);
+    /// default: `<root>/<split>/esanet` when it exists.
+    pub predictions: Option<std::path::PathBuf>,
+}
+
+/// Opens a dataset directory, detecting its layout:
+/// - a prepared layout has `<root>/<split>.txt` or `<root>/<split>/depth/`;
+/// - raw Hypersim has `<root>/<scene>/_detail/`.
+pub fn open(root: &Path, options: &OpenOptions) -> Result<Box<dyn Dataset>> {
+    if !root.is_dir() {
+        bail!("{}: not a directory", root.display());
+    }
+    let split = options.split.as_deref().unwrap_or("test");
+    if root.join(format!("{split}.txt")).is_file() || root.join(split).join("depth").is_dir() {
+        return Ok(Box::new(crate::prepared::Prepared::open(root, options)?));
+    }
+    let raw = std::fs::read_dir(root)
+        .with_context(|| format!("listing {}", root.display()))?
+        .filter_map(|e| e.ok())
+        .any(|e| e.path().join("_detail").is_dir());
+    if raw {
+        return Ok(Box::new(crate::hypersim::Hypersim::open(root, options)?));
+    }
+    bail!(
+        "{}: neither a prepared layout ({split}.txt or {split}/depth/) nor raw Hypersim (<scene>/_detail/)",
+        root.display()
+    )
+}
