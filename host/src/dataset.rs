@@ -269,7 +269,11 @@ impl Frame {
     pub fn validate(&self) -> Result<()> {
         let n = self.rays.width() as usize * self.rays.height() as usize;
         if self.depth.len() != n {
-            bail!("{}: depth has {} pixels, camera has {n}", self.id, self.depth.len());
+            bail!(
+                "{}: depth has {} pixels, camera has {n}",
+                self.id,
+                self.depth.len()
+            );
         }
         if let Rays::PerPixel { dirs, .. } = self.rays.as_ref() {
             if dirs.len() != n {
@@ -286,7 +290,11 @@ impl Frame {
         }
         if let Some(p) = &self.predictions {
             if p.classes.len() != n || p.scores.len() != n {
-                bail!("{}: predictions have {} pixels, depth has {n}", self.id, p.classes.len());
+                bail!(
+                    "{}: predictions have {} pixels, depth has {n}",
+                    self.id,
+                    p.classes.len()
+                );
             }
         }
         let t = self.pose.translation.vector;

@@ -4,13 +4,18 @@
 //! draws it. This crate grows module by module (datasets, reference, evaluation,
 //! baselines, experiments); the core stays `no_std`.
 
+pub mod budget;
 pub mod colors;
 pub mod dataset;
 pub mod eval;
 pub mod hypersim;
+pub mod npy;
 pub mod picture;
+pub mod ply;
 pub mod prepared;
 pub mod room;
+pub mod synth;
+pub mod testvector;
 
 use sndt_core::{Config, Map};
 

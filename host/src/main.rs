@@ -22,6 +22,89 @@ struct Cli {
 enum Command {
     /// Map the built-in box room (no download), print metrics, write pictures.
     Demo(DemoArgs),
+    /// Exact memory of a Map<N, B, K>; with a dataset, peak voxels and evictions per trajectory.
+    Budget(BudgetArgs),
+    /// Write (--out) or check (--check) the cross-architecture test vector of the firmware.
+    Testvector(TestvectorArgs),
+    /// Write one frame's world points, coloured by label, as a PLY point cloud.
+    Cloud(CloudArgs),
+    /// Generate a synthetic labelled split in the prepared layout (no download).
+    Synth(SynthArgs),
+}
+
+#[derive(clap::Args)]
+struct SynthArgs {
+    /// Output directory (the dataset root).
+    #[arg(long)]
+    out: PathBuf,
+    /// Number of scenes (kinds cycle: living, bedroom, kitchen, office, bathroom, open plan).
+    #[arg(long, default_value_t = 6)]
+    scenes: usize,
+    /// Seed of everything.
+    #[arg(long, default_value_t = sndt_host::synth::DEFAULT_SEED)]
+    seed: u64,
+    /// Frames per trajectory.
+    #[arg(long, default_value_t = 100)]
+    frames: usize,
+    /// Add range-dependent depth noise (Kinect v1 model).
+    #[arg(long)]
+    noise: bool,
+    /// Skip the ESANet-style predictions (9.4 MB per frame).
+    #[arg(long)]
+    no_predictions: bool,
+}
+
+#[derive(clap::Args)]
+struct CloudArgs {
+    /// Dataset directory (prepared layout or raw Hypersim).
+    dataset: PathBuf,
+    /// The frame, as `<scene>/<cam>/<NNNN>`.
+    #[arg(long)]
+    frame: String,
+    /// Output PLY file.
+    #[arg(long)]
+    out: PathBuf,
+    /// Split of the prepared layout.
+    #[arg(long, default_value = "test")]
+    split: String,
+    /// Use the authors' v0.3.1 fy = 927.06 (prepared layout without intrinsics).
+    #[arg(long)]
+    paper_fy: bool,
+}
+
+#[derive(clap::Args)]
+struct BudgetArgs {
+    /// Voxel edge in metres.
+    #[arg(long, default_value_t = 0.10)]
+    cell: f32,
+    /// Classes K.
+    #[arg(long, default_value_t = 40)]
+    classes: usize,
+    /// Surface voxel capacity N.
+    #[arg(long)]
+    capacity: usize,
+    /// Occupancy block capacity B (default N / 8).
+    #[arg(long)]
+    blocks: Option<usize>,
+    /// Dataset directory: simulate each trajectory at this capacity.
+    #[arg(long)]
+    dataset: Option<PathBuf>,
+    /// Split of the prepared layout.
+    #[arg(long)]
+    split: Option<String>,
+    /// Use every stride-th pixel of the dataset frames.
+    #[arg(long, default_value_t = 1)]
+    stride: u32,
+}
+
+#[derive(clap::Args)]
+struct TestvectorArgs {
+    /// Directory to write frames.bin and expected_crc.txt into.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// A vector to integrate and check (against expected_crc.txt beside it).
+    #[arg(long)]
+    check: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -46,6 +129,31 @@ type DemoMap = sndt_core::Map<{ 1 << 19 }, { 1 << 17 }, 40>;
 fn main() -> Result<()> {
     match Cli::parse().command {
         Command::Demo(a) => demo(&a),
+        Command::Synth(a) => synth(&a),
+        Command::Budget(a) => {
+            let dataset = a.dataset.as_deref();
+            let (cell, classes, blocks) = (a.cell, a.classes, a.blocks);
+            let report = sndt_host::budget::command(
+                cell, classes, a.capacity, blocks, dataset, a.split, a.stride,
+            )?;
+            println!("{report}");
+            Ok(())
+        }
+        Command::Testvector(a) => {
+            let summary = sndt_host::testvector::command(a.out.as_deref(), a.check.as_deref())?;
+            println!("{summary}");
+            Ok(())
+        }
+        Command::Cloud(a) => {
+            let options = sndt_host::dataset::OpenOptions {
+                split: Some(a.split),
+                paper_fy: a.paper_fy,
+                predictions: None,
+            };
+            let summary = sndt_host::ply::cloud_command(&a.dataset, &a.frame, &a.out, &options)?;
+            println!("{summary}");
+            Ok(())
+        }
     }
 }
 
@@ -166,5 +274,81 @@ fn demo(a: &DemoArgs) -> Result<()> {
         "wrote {} (semantic map from above, ceiling removed)",
         path.display()
     );
+    Ok(())
+}
+
+fn synth(a: &SynthArgs) -> Result<()> {
+    use sndt_host::synth::{write_split, DepthNoise, SynthOptions, Synthetic};
+    let t = Instant::now();
+    let options = SynthOptions {
+        scenes: a.scenes,
+        frames: a.frames,
+        seed: a.seed,
+        noise: a.noise.then_some(DepthNoise::KINECT),
+        predictions: !a.no_predictions,
+        ..SynthOptions::default()
+    };
+    let split = Synthetic::new(options)?;
+    println!(
+        "sndt synth: {} -> {}",
+        sndt_host::dataset::Dataset::describe(&split),
+        a.out.display()
+    );
+    let bar = progress((a.scenes * a.frames) as u64, "synth");
+    let summary = write_split(&a.out, &split, &|| bar.inc(1))?;
+    bar.finish_and_clear();
+    let total: u64 = summary.class_pixels.iter().sum();
+    println!(
+        "{} frames in {:.1} s",
+        summary.frames,
+        t.elapsed().as_secs_f64()
+    );
+    println!("ground-truth class histogram (share of all pixels):");
+    for (c, &n) in summary.class_pixels.iter().enumerate() {
+        if n > 0 {
+            println!(
+                "  {:>2} {:<14} {:7.3} %",
+                c,
+                NYU40[c],
+                100.0 * n as f64 / total as f64
+            );
+        }
+    }
+    let present = summary.class_pixels[1..].iter().filter(|&&n| n > 0).count();
+    println!("{present} of 40 classes occur");
+    // Previews: ground truth | prediction for the first and the middle frame of each scene.
+    let dir = a.out.join("preview");
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    for (_, ids) in sndt_host::dataset::Dataset::trajectories(&split) {
+        for id in [&ids[0], &ids[ids.len() / 2]] {
+            let f = sndt_host::dataset::Dataset::load(&split, id)?;
+            let gt = f.labels.clone().unwrap_or_default();
+            let pred = f
+                .predictions
+                .as_ref()
+                .map(|p| p.top1())
+                .unwrap_or_else(|| gt.clone());
+            let path = dir.join(format!("{}_{}.png", id.scene, id.stem()));
+            picture::side_by_side(
+                &path,
+                f.rays.width(),
+                f.rays.height(),
+                &[&gt, &pred],
+                render_color,
+            )?;
+        }
+    }
+    println!(
+        "wrote previews (ground truth | prediction) to {}",
+        dir.display()
+    );
+    if !a.no_predictions {
+        let m = summary.prediction.metrics();
+        println!(
+            "raw top-1 prediction vs ground truth: mIoU {:.2} %, mPAcc {:.2} % (the paper's ESANet: 41.17 % mIoU)",
+            m.miou * 100.0,
+            m.mpacc * 100.0
+        );
+    }
     Ok(())
 }

@@ -1,29 +1,647 @@
-//! Placeholder: being written (issue 3).
+//! The prepared layout: the authors' Hypersim preparation (v0.3.1) and our synthetic
+//! scenes, read and written.
+//!
+//! ```text
+//! <root>/<split>.txt                                   lines `scene/cam/NNNN` (optional)
+//! <root>/<split>/depth/<scene>/<cam>/<NNNN>.png        uint16 planar depth, mm, 0 = invalid
+//! <root>/<split>/semantic_40/<scene>/<cam>/<NNNN>.png  uint8, 0 void / 1..=40 (optional dir)
+//! <root>/<split>/extrinsics/<scene>/<cam>/<NNNN>.json  {x,y,z,quat_x,quat_y,quat_z,quat_w}
+//! <root>/<split>/intrinsics/<scene>/<cam>.json         {fx,fy,cx,cy,width,height} (ours only)
+//! <root>/<split>/esanet/<scene>/<cam>/<NNNN>.npy       top-3 predictions (optional dir)
+//! ```
+//!
+//! The extrinsics hold the camera position in metres and the *raw* Hypersim
+//! `R_world_from_cam`, whose camera axes are OpenGL's (x right, y up, z backward); the
+//! reader turns it into our OpenCV-axes pose with `R_cv = R diag(1, -1, -1)` and the writer
+//! undoes that. Without an intrinsics file (the authors' data) the camera is the nominal
+//! Hypersim pinhole, or with [`OpenOptions::paper_fy`] the authors' wrong fy.
 
-use crate::dataset::{Dataset, Frame, FrameId, OpenOptions};
-use anyhow::{bail, Result};
-use std::path::Path;
+use crate::dataset::{Dataset, Frame, FrameId, OpenOptions, Rays};
+use crate::npy;
+use anyhow::{bail, Context, Result};
+use sndt_core::{DepthKind, Isometry3, Pinhole, Translation3, UnitQuaternion};
+use std::collections::HashMap;
+use std::fs::File;
+use std::io::{BufReader, BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
 
-/// Placeholder reader.
+/// Nominal Hypersim focal length in pixels (fx = fy), for 1024x768 images.
+pub const HYPERSIM_F: f32 = 886.81;
+/// The fy the authors' v0.3.1 preparation used for every scene (a bug; see
+/// [`OpenOptions::paper_fy`]).
+pub const PAPER_FY: f32 = 927.06;
+
+/// The nominal Hypersim pinhole (fx = fy = 886.81, cx = 512, cy = 384, 1024x768), or with
+/// `paper_fy` the authors' fy = 927.06.
+///
+/// ```
+/// let cam = sndt_host::prepared::nominal_camera(true);
+/// assert_eq!((cam.fx, cam.fy, cam.width, cam.height), (886.81, 927.06, 1024, 768));
+/// assert_eq!(sndt_host::prepared::nominal_camera(false).fy, 886.81);
+/// ```
+pub fn nominal_camera(paper_fy: bool) -> Pinhole {
+    Pinhole {
+        fx: HYPERSIM_F,
+        fy: if paper_fy { PAPER_FY } else { HYPERSIM_F },
+        cx: 512.0,
+        cy: 384.0,
+        width: 1024,
+        height: 768,
+    }
+}
+
+/// The `extrinsics/*.json` record: position in metres and the raw Hypersim
+/// `R_world_from_cam` (OpenGL camera axes) as a quaternion.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Extrinsics {
+    /// Camera position x, metres.
+    pub x: f64,
+    /// Camera position y, metres.
+    pub y: f64,
+    /// Camera position z, metres.
+    pub z: f64,
+    /// Quaternion x of the raw (OpenGL-axes) rotation.
+    pub quat_x: f64,
+    /// Quaternion y.
+    pub quat_y: f64,
+    /// Quaternion z.
+    pub quat_z: f64,
+    /// Quaternion w.
+    pub quat_w: f64,
+}
+
+/// Largest accepted deviation of the extrinsics quaternion's norm from 1.
+pub const QUAT_NORM_TOLERANCE: f64 = 1e-3;
+
+impl Extrinsics {
+    /// Our camera-to-world pose (OpenCV axes): `R_cv = R_gl diag(1, -1, -1)`, i.e. the
+    /// quaternion times a 180 degree turn about x. Fails on non-finite values or a
+    /// quaternion whose norm is not 1 (within [`QUAT_NORM_TOLERANCE`]).
+    ///
+    /// ```
+    /// use sndt_host::prepared::Extrinsics;
+    /// let e = Extrinsics { x: 1.0, y: 2.0, z: 3.0, quat_x: 0.0, quat_y: 0.0, quat_z: 0.0, quat_w: 1.0 };
+    /// let pose = e.to_pose().unwrap();
+    /// // identity OpenGL rotation: the camera looks along world -z
+    /// let forward = pose.rotation * sndt_core::Vector3::z();
+    /// assert!((forward - sndt_core::Vector3::new(0.0, 0.0, -1.0)).norm() < 1e-6);
+    /// assert_eq!(Extrinsics::from_pose(&pose).to_pose().unwrap(), pose);
+    /// ```
+    pub fn to_pose(&self) -> Result<Isometry3<f32>> {
+        let v = [
+            self.x,
+            self.y,
+            self.z,
+            self.quat_x,
+            self.quat_y,
+            self.quat_z,
+            self.quat_w,
+        ];
+        if v.iter().any(|x| !x.is_finite()) {
+            bail!("extrinsics are not finite: {self:?}");
+        }
+        let (x, y, z, w) = (self.quat_x, self.quat_y, self.quat_z, self.quat_w);
+        let norm = (x * x + y * y + z * z + w * w).sqrt();
+        if (norm - 1.0).abs() > QUAT_NORM_TOLERANCE {
+            bail!("extrinsics quaternion has norm {norm}, not 1");
+        }
+        // q_cv = q_gl * q_x(180°), q_x(180°) = (w 0, x 1, y 0, z 0): exact component shuffle.
+        let q = nalgebra::Quaternion::new(-x, w, z, -y) / norm;
+        let rotation = UnitQuaternion::from_quaternion(q.cast::<f32>());
+        Ok(Isometry3::from_parts(
+            Translation3::new(self.x as f32, self.y as f32, self.z as f32),
+            rotation,
+        ))
+    }
+
+    /// The record of our pose (OpenCV axes): the inverse of [`Extrinsics::to_pose`].
+    pub fn from_pose(pose: &Isometry3<f32>) -> Extrinsics {
+        let q = pose.rotation.into_inner().cast::<f64>();
+        // q_gl = q_cv * q_x(180°)^-1 = q_cv * (w 0, x -1, y 0, z 0)
+        let gl = q * nalgebra::Quaternion::new(0.0, -1.0, 0.0, 0.0);
+        let t = pose.translation.vector.cast::<f64>();
+        Extrinsics {
+            x: t.x,
+            y: t.y,
+            z: t.z,
+            quat_x: gl.i,
+            quat_y: gl.j,
+            quat_z: gl.k,
+            quat_w: gl.w,
+        }
+    }
+}
+
+/// The `intrinsics/<scene>/<cam>.json` record our writer adds (pinhole, pixels).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Intrinsics {
+    /// Focal length along x.
+    pub fx: f64,
+    /// Focal length along y.
+    pub fy: f64,
+    /// Principal point x (pixel centres at `col + 0.5`).
+    pub cx: f64,
+    /// Principal point y.
+    pub cy: f64,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+}
+
+impl Intrinsics {
+    /// The pinhole, checking focal lengths are finite and positive and the size non-zero.
+    pub fn to_pinhole(&self) -> Result<Pinhole> {
+        let ok = [self.fx, self.fy].iter().all(|f| f.is_finite() && *f > 0.0)
+            && self.cx.is_finite()
+            && self.cy.is_finite()
+            && self.width > 0
+            && self.height > 0;
+        if !ok {
+            bail!("invalid intrinsics {self:?}");
+        }
+        Ok(Pinhole {
+            fx: self.fx as f32,
+            fy: self.fy as f32,
+            cx: self.cx as f32,
+            cy: self.cy as f32,
+            width: self.width,
+            height: self.height,
+        })
+    }
+
+    /// The record of a pinhole.
+    pub fn from_pinhole(p: &Pinhole) -> Intrinsics {
+        Intrinsics {
+            fx: p.fx as f64,
+            fy: p.fy as f64,
+            cx: p.cx as f64,
+            cy: p.cy as f64,
+            width: p.width,
+            height: p.height,
+        }
+    }
+}
+
+/// A prepared-layout dataset opened for reading (see the module docs).
 pub struct Prepared {
+    root: PathBuf,
+    split: String,
+    dir: PathBuf,
     frames: Vec<FrameId>,
+    labels: bool,
+    predictions: Option<PathBuf>,
+    paper_fy: bool,
+    rays: Mutex<HashMap<(String, String), Arc<Rays>>>,
 }
 
 impl Prepared {
-    /// Opens the dataset at `root`.
-    pub fn open(root: &Path, _options: &OpenOptions) -> Result<Prepared> {
-        bail!("{}: reader not implemented yet", root.display())
+    /// Opens split `options.split` (default `test`) of the layout at `root`. The frame
+    /// list comes from `<root>/<split>.txt` when present, else from listing
+    /// `<split>/depth/`. Files of individual frames are only read by [`Dataset::load`].
+    pub fn open(root: &Path, options: &OpenOptions) -> Result<Prepared> {
+        let split = options.split.clone().unwrap_or_else(|| "test".to_string());
+        let dir = root.join(&split);
+        let depth = dir.join("depth");
+        if !depth.is_dir() {
+            bail!(
+                "{}: missing (prepared layout needs depth/)",
+                depth.display()
+            );
+        }
+        let list = root.join(format!("{split}.txt"));
+        let mut frames = if list.is_file() {
+            read_split_list(&list)?
+        } else {
+            list_depth(&depth)?
+        };
+        frames.sort();
+        frames.dedup();
+        let predictions = match &options.predictions {
+            Some(p) if !p.is_dir() => bail!("{}: predictions directory not found", p.display()),
+            Some(p) => Some(p.clone()),
+            None => Some(dir.join("esanet")).filter(|p| p.is_dir()),
+        };
+        Ok(Prepared {
+            root: root.to_path_buf(),
+            labels: dir.join("semantic_40").is_dir(),
+            split,
+            dir,
+            frames,
+            predictions,
+            paper_fy: options.paper_fy,
+            rays: Mutex::new(HashMap::new()),
+        })
+    }
+
+    fn file(&self, kind: &str, id: &FrameId, ext: &str) -> PathBuf {
+        frame_path(&self.dir.join(kind), id, ext)
+    }
+
+    /// The rays of camera `scene/cam`: its intrinsics file, else the nominal camera.
+    fn rays(&self, id: &FrameId) -> Result<Arc<Rays>> {
+        let key = (id.scene.clone(), id.cam.clone());
+        if let Some(r) = self.rays.lock().expect("rays cache").get(&key) {
+            return Ok(r.clone());
+        }
+        let path = intrinsics_path(&self.dir, id);
+        let cam = if path.is_file() {
+            let intr: Intrinsics = read_json(&path)?;
+            intr.to_pinhole()
+                .with_context(|| format!("{}", path.display()))?
+        } else {
+            nominal_camera(self.paper_fy)
+        };
+        let rays = Arc::new(Rays::Pinhole(cam));
+        self.rays
+            .lock()
+            .expect("rays cache")
+            .insert(key, rays.clone());
+        Ok(rays)
     }
 }
 
 impl Dataset for Prepared {
     fn describe(&self) -> String {
-        String::new()
+        format!(
+            "prepared layout {} split {}: {} frames, {} trajectories, labels {}, predictions {}, {}",
+            self.root.display(),
+            self.split,
+            self.frames.len(),
+            self.trajectories().len(),
+            if self.labels { "yes" } else { "no" },
+            self.predictions
+                .as_ref()
+                .map_or("none".to_string(), |p| p.display().to_string()),
+            if self.dir.join("intrinsics").is_dir() {
+                "intrinsics per camera".to_string()
+            } else {
+                let c = nominal_camera(self.paper_fy);
+                format!(
+                    "nominal Hypersim camera fx {} fy {}{}",
+                    c.fx,
+                    c.fy,
+                    if self.paper_fy { " (paper)" } else { "" }
+                )
+            }
+        )
     }
+
     fn frames(&self) -> &[FrameId] {
         &self.frames
     }
+
     fn load(&self, id: &FrameId) -> Result<Frame> {
-        bail!("{id}: reader not implemented yet")
+        let rays = self.rays(id)?;
+        let (w, h) = (rays.width(), rays.height());
+        let camera_source = || {
+            let p = intrinsics_path(&self.dir, id);
+            if p.is_file() {
+                p.display().to_string()
+            } else {
+                "the nominal Hypersim camera".to_string()
+            }
+        };
+
+        let depth_path = self.file("depth", id, "png");
+        let (dw, dh, mm) = read_png16(&depth_path)?;
+        if (dw, dh) != (w, h) {
+            bail!(
+                "{}: depth is {dw}x{dh}, camera ({}) is {w}x{h}",
+                depth_path.display(),
+                camera_source()
+            );
+        }
+        let depth = mm.iter().map(|&v| v as f32 / 1000.0).collect();
+
+        let labels = if self.labels {
+            let path = self.file("semantic_40", id, "png");
+            let (lw, lh, l) = read_png8(&path)?;
+            if (lw, lh) != (w, h) {
+                bail!("{}: labels are {lw}x{lh}, depth is {w}x{h}", path.display());
+            }
+            if let Some((i, bad)) = l.iter().enumerate().find(|&(_, &c)| c > 40) {
+                bail!(
+                    "{}: label {bad} at pixel ({}, {}) is outside 0..=40",
+                    path.display(),
+                    i as u32 % w,
+                    i as u32 / w
+                );
+            }
+            Some(l)
+        } else {
+            None
+        };
+
+        let ext_path = self.file("extrinsics", id, "json");
+        let ext: Extrinsics = read_json(&ext_path)?;
+        let pose = ext
+            .to_pose()
+            .with_context(|| format!("{}", ext_path.display()))?;
+
+        let predictions = match &self.predictions {
+            Some(dir) => Some(npy::read_topk(&frame_path(dir, id, "npy"), w, h)?),
+            None => None,
+        };
+
+        let frame = Frame {
+            id: id.clone(),
+            pose,
+            rays,
+            depth,
+            depth_kind: DepthKind::Planar,
+            labels,
+            predictions,
+        };
+        frame
+            .validate()
+            .with_context(|| format!("{}: frame {id}", self.dir.display()))?;
+        Ok(frame)
     }
+}
+
+/// `<dir>/<scene>/<cam>/<NNNN>.<ext>`.
+fn frame_path(dir: &Path, id: &FrameId, ext: &str) -> PathBuf {
+    dir.join(&id.scene)
+        .join(&id.cam)
+        .join(format!("{}.{ext}", id.stem()))
+}
+
+fn intrinsics_path(split_dir: &Path, id: &FrameId) -> PathBuf {
+    split_dir
+        .join("intrinsics")
+        .join(&id.scene)
+        .join(format!("{}.json", id.cam))
+}
+
+/// Reads a split list: one `scene/cam/NNNN` per line; blank lines and `#` comments skipped.
+fn read_split_list(path: &Path) -> Result<Vec<FrameId>> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: reading split list", path.display()))?;
+    let mut out = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        out.push(
+            FrameId::parse(line)
+                .with_context(|| format!("{}:{}: malformed line", path.display(), n + 1))?,
+        );
+    }
+    Ok(out)
+}
+
+/// Lists `<depth>/<scene>/<cam>/<NNNN>.png`.
+fn list_depth(depth: &Path) -> Result<Vec<FrameId>> {
+    let dirs = |p: &Path| -> Result<Vec<(String, PathBuf)>> {
+        let mut v = Vec::new();
+        for e in std::fs::read_dir(p).with_context(|| format!("listing {}", p.display()))? {
+            let e = e.with_context(|| format!("listing {}", p.display()))?;
+            v.push((e.file_name().to_string_lossy().into_owned(), e.path()));
+        }
+        Ok(v)
+    };
+    let mut out = Vec::new();
+    for (scene, sp) in dirs(depth)?.into_iter().filter(|(_, p)| p.is_dir()) {
+        for (cam, cp) in dirs(&sp)?.into_iter().filter(|(_, p)| p.is_dir()) {
+            for (name, fp) in dirs(&cp)? {
+                let Some(stem) = name.strip_suffix(".png") else {
+                    continue;
+                };
+                let index = stem
+                    .parse()
+                    .with_context(|| format!("{}: file name is not <NNNN>.png", fp.display()))?;
+                out.push(FrameId {
+                    scene: scene.clone(),
+                    cam: cam.clone(),
+                    index,
+                });
+            }
+        }
+    }
+    Ok(out)
+}
+
+fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
+    let file = File::open(path).with_context(|| format!("{}: opening", path.display()))?;
+    serde_json::from_reader(BufReader::new(file))
+        .with_context(|| format!("{}: invalid JSON record", path.display()))
+}
+
+/// Decodes a grayscale PNG of the given bit depth: `(width, height, raw bytes)`.
+fn read_png(path: &Path, depth: png::BitDepth) -> Result<(u32, u32, Vec<u8>)> {
+    let shown = path.display();
+    let file = File::open(path).with_context(|| format!("{shown}: opening"))?;
+    let mut decoder = png::Decoder::new(BufReader::new(file));
+    decoder.set_transformations(png::Transformations::IDENTITY);
+    let mut reader = decoder
+        .read_info()
+        .with_context(|| format!("{shown}: not a readable PNG"))?;
+    let info = reader.info();
+    let (w, h, color, bits) = (info.width, info.height, info.color_type, info.bit_depth);
+    if color != png::ColorType::Grayscale || bits != depth {
+        bail!("{shown}: {color:?} {bits:?} PNG, expected Grayscale {depth:?}");
+    }
+    let size = reader
+        .output_buffer_size()
+        .with_context(|| format!("{shown}: image too large"))?;
+    let mut buf = vec![0u8; size];
+    reader
+        .next_frame(&mut buf)
+        .with_context(|| format!("{shown}: decoding image data (truncated?)"))?;
+    Ok((w, h, buf))
+}
+
+/// uint16 grayscale PNG (big-endian samples).
+fn read_png16(path: &Path) -> Result<(u32, u32, Vec<u16>)> {
+    let (w, h, raw) = read_png(path, png::BitDepth::Sixteen)?;
+    let v = raw
+        .chunks_exact(2)
+        .map(|b| u16::from_be_bytes([b[0], b[1]]))
+        .collect();
+    Ok((w, h, v))
+}
+
+fn read_png8(path: &Path) -> Result<(u32, u32, Vec<u8>)> {
+    read_png(path, png::BitDepth::Eight)
+}
+
+/// Writes a file atomically: into a unique temporary file beside it, then renamed over
+/// it, so concurrent writers of identical content and concurrent readers are safe.
+fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let parent = path
+        .parent()
+        .with_context(|| format!("{}: no parent directory", path.display()))?;
+    std::fs::create_dir_all(parent).with_context(|| format!("creating {}", parent.display()))?;
+    let tmp = parent.join(format!(
+        ".{}.tmp-{}-{}",
+        path.file_name().map_or("f".into(), |n| n.to_string_lossy()),
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let result = write(&tmp).and_then(|()| {
+        std::fs::rename(&tmp, path)
+            .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+fn write_png(path: &Path, w: u32, h: u32, depth: png::BitDepth, data: &[u8]) -> Result<()> {
+    write_atomic(path, |tmp| {
+        let file = File::create(tmp).with_context(|| format!("{}: creating", tmp.display()))?;
+        let mut enc = png::Encoder::new(BufWriter::new(file), w, h);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(depth);
+        let mut writer = enc
+            .write_header()
+            .with_context(|| format!("{}: writing PNG header", path.display()))?;
+        writer
+            .write_image_data(data)
+            .with_context(|| format!("{}: writing PNG data", path.display()))?;
+        writer
+            .finish()
+            .with_context(|| format!("{}: finishing PNG", path.display()))
+    })
+}
+
+fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
+    let mut text = serde_json::to_string_pretty(value)?;
+    text.push('\n');
+    write_atomic(path, |tmp| {
+        let mut f = File::create(tmp).with_context(|| format!("{}: creating", tmp.display()))?;
+        f.write_all(text.as_bytes())
+            .with_context(|| format!("{}: writing", path.display()))
+    })
+}
+
+/// Depth in metres to the layout's uint16 millimetres: rounded, 0 for no measurement or
+/// beyond 65.535 m.
+///
+/// ```
+/// use sndt_host::prepared::depth_to_mm;
+/// assert_eq!(depth_to_mm(1.2345), 1235);
+/// assert_eq!(depth_to_mm(0.0), 0);
+/// assert_eq!(depth_to_mm(f32::NAN), 0);
+/// assert_eq!(depth_to_mm(65.535), 65535);
+/// assert_eq!(depth_to_mm(70.0), 0);
+/// ```
+pub fn depth_to_mm(d: f32) -> u16 {
+    if !(d.is_finite() && d > 0.0) {
+        return 0;
+    }
+    let mm = (d as f64 * 1000.0).round();
+    if mm > u16::MAX as f64 {
+        0
+    } else {
+        mm as u16
+    }
+}
+
+/// Writes one frame into `<root>/<split>/...` (creating directories): depth PNG (planar,
+/// mm), `semantic_40` PNG when the frame has labels, extrinsics JSON (raw OpenGL-axes
+/// rotation), `intrinsics/<scene>/<cam>.json` (must agree with an existing one) and
+/// `esanet` npy when it has predictions. Every file is written atomically, so several
+/// threads may write different frames (of the same cameras) at once.
+///
+/// Only pinhole frames can be written: the layout has no place for per-pixel rays.
+///
+/// ```
+/// use sndt_host::dataset::{self, Dataset, Frame, FrameId, Rays};
+/// # let root = std::env::temp_dir().join(format!("sndt-prepared-doc-{}", std::process::id()));
+/// let cam = sndt_core::Pinhole { fx: 2.0, fy: 2.0, cx: 1.0, cy: 1.0, width: 2, height: 2 };
+/// let frame = Frame {
+///     id: FrameId::parse("room/cam_00/0000").unwrap(),
+///     pose: sndt_core::Isometry3::identity(),
+///     rays: std::sync::Arc::new(Rays::Pinhole(cam)),
+///     depth: vec![1.0, 2.0, 0.0, 1.5],
+///     depth_kind: sndt_core::DepthKind::Planar,
+///     labels: Some(vec![1, 2, 0, 40]),
+///     predictions: None,
+/// };
+/// sndt_host::prepared::write_frame(&root, "test", &frame).unwrap();
+/// sndt_host::prepared::write_split_list(&root, "test", &[frame.id.clone()]).unwrap();
+/// let data = dataset::open(&root, &dataset::OpenOptions::default()).unwrap();
+/// let back = data.load(&data.frames()[0]).unwrap();
+/// assert_eq!((back.depth, back.labels), (frame.depth, frame.labels));
+/// # std::fs::remove_dir_all(&root).unwrap();
+/// ```
+pub fn write_frame(root: &Path, split: &str, frame: &Frame) -> Result<()> {
+    let id = &frame.id;
+    frame
+        .validate()
+        .with_context(|| format!("writing frame {id}"))?;
+    let Rays::Pinhole(cam) = frame.rays.as_ref() else {
+        bail!("{id}: per-pixel rays cannot be stored in the prepared layout (pinhole only)");
+    };
+    let (w, h) = (cam.width, cam.height);
+    let dir = root.join(split);
+
+    let intr_path = intrinsics_path(&dir, id);
+    let intr = Intrinsics::from_pinhole(cam);
+    if intr_path.is_file() {
+        let old: Intrinsics = read_json(&intr_path)?;
+        if old != intr {
+            bail!(
+                "{}: holds {old:?}, frame {id} has {intr:?}",
+                intr_path.display()
+            );
+        }
+    } else {
+        write_json(&intr_path, &intr)?;
+    }
+
+    let depth: Vec<u8> = frame
+        .planar_depth_image()
+        .iter()
+        .flat_map(|&d| depth_to_mm(d).to_be_bytes())
+        .collect();
+    write_png(
+        &frame_path(&dir.join("depth"), id, "png"),
+        w,
+        h,
+        png::BitDepth::Sixteen,
+        &depth,
+    )?;
+
+    if let Some(labels) = &frame.labels {
+        write_png(
+            &frame_path(&dir.join("semantic_40"), id, "png"),
+            w,
+            h,
+            png::BitDepth::Eight,
+            labels,
+        )?;
+    }
+
+    write_json(
+        &frame_path(&dir.join("extrinsics"), id, "json"),
+        &Extrinsics::from_pose(&frame.pose),
+    )?;
+
+    if let Some(p) = &frame.predictions {
+        let path = frame_path(&dir.join("esanet"), id, "npy");
+        write_atomic(&path, |tmp| npy::write_topk(tmp, p, w, h))?;
+    }
+    Ok(())
+}
+
+/// Writes the split list `<root>/<split>.txt`, one `scene/cam/NNNN` line per frame in
+/// the given order.
+pub fn write_split_list(root: &Path, split: &str, ids: &[FrameId]) -> Result<()> {
+    let mut text = String::with_capacity(ids.len() * 24);
+    for id in ids {
+        text.push_str(&id.to_string());
+        text.push('\n');
+    }
+    let path = root.join(format!("{split}.txt"));
+    write_atomic(&path, |tmp| {
+        std::fs::write(tmp, &text).with_context(|| format!("{}: writing", path.display()))
+    })
 }
