@@ -331,6 +331,58 @@ pub trait Dataset: Send + Sync {
     }
 }
 
+/// Every `step`-th frame of each trajectory of another dataset (frames `0, step, 2 step,
+/// ...`): a whole trajectory's walk with fewer frames.
+///
+/// ```
+/// use sndt_host::dataset::{open_spec, Dataset, Every};
+/// let d = Every::new(open_spec("synthetic:1:10", &Default::default()).unwrap(), 4);
+/// let idx: Vec<u32> = d.frames().iter().map(|f| f.index).collect();
+/// assert_eq!(idx, [0, 4, 8]);
+/// ```
+pub struct Every {
+    inner: Box<dyn Dataset>,
+    frames: Vec<FrameId>,
+    step: u32,
+}
+
+impl Every {
+    /// Wraps `inner`, keeping every `step`-th frame (`step` 0 counts as 1).
+    pub fn new(inner: Box<dyn Dataset>, step: u32) -> Every {
+        let step = step.max(1);
+        let frames = inner
+            .frames()
+            .iter()
+            .filter(|f| f.index % step == 0)
+            .cloned()
+            .collect();
+        Every {
+            inner,
+            frames,
+            step,
+        }
+    }
+}
+
+impl Dataset for Every {
+    fn describe(&self) -> String {
+        format!(
+            "{} (every {}th frame: {} frames)",
+            self.inner.describe(),
+            self.step,
+            self.frames.len()
+        )
+    }
+
+    fn frames(&self) -> &[FrameId] {
+        &self.frames
+    }
+
+    fn load(&self, id: &FrameId) -> Result<Frame> {
+        self.inner.load(id)
+    }
+}
+
 /// Options for [`open`].
 #[derive(Clone, Debug, Default)]
 pub struct OpenOptions {
@@ -342,6 +394,29 @@ pub struct OpenOptions {
     /// Directory of ESANet `.npy` predictions (`<dir>/<scene>/<cam>/<NNNN>.npy`);
     /// default: `<root>/<split>/esanet` when it exists.
     pub predictions: Option<std::path::PathBuf>,
+}
+
+/// Opens `spec`: the word `synthetic` for the default synthetic split rendered on the
+/// fly (no files; `synthetic:SCENES:FRAMES` for a smaller one), else a dataset
+/// directory (see [`open`]).
+///
+/// ```
+/// let d = sndt_host::dataset::open_spec("synthetic:1:2", &Default::default()).unwrap();
+/// assert_eq!(d.frames().len(), 2);
+/// ```
+pub fn open_spec(spec: &str, options: &OpenOptions) -> Result<Box<dyn Dataset>> {
+    if let Some(rest) = spec.strip_prefix("synthetic") {
+        let mut o = crate::synth::SynthOptions::default();
+        let nums: Vec<&str> = rest.split(':').skip(1).collect();
+        if let [scenes, frames] = nums.as_slice() {
+            o.scenes = scenes.parse().with_context(|| format!("{spec}: scenes"))?;
+            o.frames = frames.parse().with_context(|| format!("{spec}: frames"))?;
+        } else if !rest.is_empty() {
+            bail!("{spec}: expected synthetic or synthetic:SCENES:FRAMES");
+        }
+        return Ok(Box::new(crate::synth::Synthetic::new(o)?));
+    }
+    open(Path::new(spec), options)
 }
 
 /// Opens a dataset directory, detecting its layout:

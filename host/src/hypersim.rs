@@ -313,7 +313,9 @@ impl Dataset for Hypersim {
             labels,
             predictions: match &self.predictions {
                 Some(dir) => Some(crate::npy::read_topk(
-                    &dir.join(&id.scene).join(&id.cam).join(format!("{}.npy", id.stem())),
+                    &dir.join(&id.scene)
+                        .join(&id.cam)
+                        .join(format!("{}.npy", id.stem())),
                     shape[1] as u32,
                     shape[0] as u32,
                 )?),

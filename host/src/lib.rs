@@ -5,14 +5,20 @@
 //! baselines, experiments); the core stays `no_std`.
 
 pub mod budget;
+pub mod chart;
 pub mod colors;
+pub mod compare;
 pub mod dataset;
+pub mod demo;
 pub mod eval;
+pub mod evaluate;
+pub mod export;
 pub mod hypersim;
 pub mod npy;
 pub mod picture;
 pub mod ply;
 pub mod prepared;
+pub mod reference;
 pub mod room;
 pub mod synth;
 pub mod testvector;

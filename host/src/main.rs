@@ -2,10 +2,8 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
-use sndt_core::{Config, MissModel};
+use sndt_core::Config;
 use sndt_host::colors::{render_color, NYU40};
-use sndt_host::eval::Confusion;
-use sndt_host::room::{orbit, Scene, HYPERSIM_CAMERA};
 use sndt_host::{picture, progress};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -20,7 +18,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Map the built-in box room (no download), print metrics, write pictures.
+    /// Map a small synthetic split (no download) with GT and predicted labels; metrics and pictures.
     Demo(DemoArgs),
     /// Exact memory of a Map<N, B, K>; with a dataset, peak voxels and evictions per trajectory.
     Budget(BudgetArgs),
@@ -30,6 +28,65 @@ enum Command {
     Cloud(CloudArgs),
     /// Generate a synthetic labelled split in the prepared layout (no download).
     Synth(SynthArgs),
+    /// Map every trajectory of a dataset and evaluate the back-projections (DESIGN §4).
+    Map(MapArgs),
+    /// Write a map's Gaussians as a PLY (points or ellipsoids) for MeshLab/CloudCompare.
+    Export(ExportArgs),
+    /// Integrate frames into the core and the f64 reference and compare them per cell size.
+    Compare(sndt_host::compare::CompareArgs),
+}
+
+#[derive(clap::Args)]
+struct MapArgs {
+    /// Dataset directory (prepared layout or raw Hypersim), or `synthetic[:SCENES:FRAMES]`.
+    dataset: String,
+    /// Voxel edge in metres.
+    #[arg(long, default_value_t = 0.10)]
+    cell: f32,
+    /// Labels fed to the map.
+    #[arg(long, value_enum, default_value = "gt")]
+    labels: sndt_host::dataset::LabelSource,
+    /// Output directory: back-projection PNGs `<out>/<scene>/<cam>/<NNNN>.png`,
+    /// metrics.json and metrics.md.
+    #[arg(long, default_value = "out/map")]
+    out: PathBuf,
+    /// Split of the prepared layout.
+    #[arg(long, default_value = "test")]
+    split: String,
+    /// Use the authors' v0.3.1 fy = 927.06 (prepared layout without intrinsics).
+    #[arg(long)]
+    paper_fy: bool,
+    /// Directory of ESANet `.npy` predictions.
+    #[arg(long)]
+    predictions: Option<PathBuf>,
+    /// Use every stride-th pixel when mapping.
+    #[arg(long, default_value_t = 1)]
+    stride: u32,
+    /// Also write each trajectory's map snapshot to `<out>/maps/<scene>_<cam>.sndt`.
+    #[arg(long)]
+    save_maps: bool,
+}
+
+#[derive(clap::Args)]
+struct ExportArgs {
+    /// A map snapshot (`.sndt`, from `sndt map --save-maps`), or a dataset
+    /// (directory or `synthetic[:SCENES:FRAMES]`) whose first trajectory is mapped.
+    input: String,
+    /// Output PLY file.
+    #[arg(long)]
+    ply: PathBuf,
+    /// Ellipsoid meshes at this many standard deviations instead of points at the means.
+    #[arg(long)]
+    ellipsoids: Option<f32>,
+    /// Voxel edge in metres (when mapping a dataset).
+    #[arg(long, default_value_t = 0.10)]
+    cell: f32,
+    /// Labels fed to the map (when mapping a dataset).
+    #[arg(long, value_enum, default_value = "gt")]
+    labels: sndt_host::dataset::LabelSource,
+    /// Only voxels with at least this many points.
+    #[arg(long, default_value_t = 3)]
+    min_points: u32,
 }
 
 #[derive(clap::Args)]
@@ -109,27 +166,33 @@ struct TestvectorArgs {
 
 #[derive(clap::Args)]
 struct DemoArgs {
-    /// Output directory for pictures.
+    /// Output directory for pictures, back-projections and metrics.
     #[arg(long, default_value = "out/demo")]
     out: PathBuf,
     /// Voxel edge in metres.
     #[arg(long, default_value_t = 0.10)]
     cell: f32,
-    /// Frames of the walk around the room.
-    #[arg(long, default_value_t = 12)]
+    /// Synthetic scenes (kinds cycle: living, bedroom, kitchen, office, bathroom, open plan).
+    #[arg(long, default_value_t = 2)]
+    scenes: usize,
+    /// Frames per trajectory.
+    #[arg(long, default_value_t = 20)]
     frames: usize,
     /// Use constant misses instead of NDT-OM misses.
     #[arg(long)]
     constant_miss: bool,
 }
 
-/// Map capacity of the demo: 2^19 NDT voxels, 2^17 blocks, 40 classes (~71 MiB).
-type DemoMap = sndt_core::Map<{ 1 << 19 }, { 1 << 17 }, 40>;
-
 fn main() -> Result<()> {
     match Cli::parse().command {
         Command::Demo(a) => demo(&a),
         Command::Synth(a) => synth(&a),
+        Command::Compare(a) => {
+            println!("{}", sndt_host::compare::command(&a)?);
+            Ok(())
+        }
+        Command::Map(a) => map_command(&a),
+        Command::Export(a) => export(&a),
         Command::Budget(a) => {
             let dataset = a.dataset.as_deref();
             let (cell, classes, blocks) = (a.cell, a.classes, a.blocks);
@@ -158,123 +221,13 @@ fn main() -> Result<()> {
 }
 
 fn demo(a: &DemoArgs) -> Result<()> {
-    let scene = Scene::simple_room();
-    let cam = HYPERSIM_CAMERA;
-    let poses = orbit(a.frames);
-    let mut config = Config::with_cell_size(a.cell);
-    if a.constant_miss {
-        config.miss_model = MissModel::Constant;
-    }
-    let mut map: Box<DemoMap> =
-        sndt_host::boxed_map(config).map_err(|e| anyhow::anyhow!("config: {e:?}"))?;
-    println!(
-        "sndt demo: box room, {} frames of {}x{}, cell {:.0} cm, map capacity {} voxels / {} blocks ({:.1} MiB)",
-        poses.len(),
-        cam.width,
-        cam.height,
-        a.cell * 100.0,
-        1 << 19,
-        1 << 17,
-        DemoMap::BYTES as f64 / (1 << 20) as f64
-    );
-
-    let bar = progress(poses.len() as u64, "render");
-    let frames: Vec<_> = poses
-        .iter()
-        .map(|p| {
-            bar.inc(1);
-            scene.render(p, &cam)
-        })
-        .collect();
-    bar.finish_and_clear();
-
-    let bar = progress(poses.len() as u64, "map");
-    let mut update = Vec::new();
-    let mut points = 0u64;
-    for (pose, (depth, labels)) in poses.iter().zip(&frames) {
-        let img = sndt_host::room::depth_image(&cam, depth, labels);
-        let t = Instant::now();
-        let r = map
-            .integrate_depth(pose, &img)
-            .map_err(|e| anyhow::anyhow!("integrate: {e:?}"))?;
-        update.push(t.elapsed().as_secs_f64());
-        points += r.points_used as u64;
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
-
-    let bar = progress(poses.len() as u64, "back-project");
-    let mut confusion = Confusion::default();
-    let mut renders = Vec::new();
-    let n = (cam.width * cam.height) as usize;
-    for (pose, (depth, labels)) in poses.iter().zip(&frames) {
-        let (mut pred, mut dist) = (vec![0u8; n], vec![0f32; n]);
-        map.render(pose, &cam, &mut pred, &mut dist)
-            .map_err(|e| anyhow::anyhow!("render: {e:?}"))?;
-        confusion.add_frame(labels, &pred, depth);
-        renders.push(pred);
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
-
-    let m = confusion.metrics();
-    let mean_ms = update.iter().sum::<f64>() / update.len() as f64 * 1e3;
-    let free = map.cells().filter(|(_, l)| *l < 0.0).count();
-    let occupied = map.cells().filter(|(_, l)| *l > 0.0).count();
-    println!();
-    println!("| metric | value |");
-    println!("|---|---|");
-    println!("| points integrated | {points} |");
-    println!("| NDT voxels | {} |", map.len());
-    println!("| occupancy blocks | {} |", map.block_count());
-    println!("| occupied / free voxels | {occupied} / {free} |");
-    println!(
-        "| evicted voxels / blocks | {} / {} |",
-        map.stats().voxels_evicted,
-        map.stats().blocks_evicted
-    );
-    println!(
-        "| memory in use | {:.1} MiB of {:.1} MiB |",
-        (map.len() * DemoMap::VOXEL_BYTES + map.block_count() * sndt_core::BLOCK_BYTES) as f64
-            / (1 << 20) as f64,
-        DemoMap::BYTES as f64 / (1 << 20) as f64
-    );
-    println!(
-        "| update time | {mean_ms:.1} ms/frame ({:.1} Hz) |",
-        1e3 / mean_ms
-    );
-    println!("| mIoU | {:.2} % |", m.miou * 100.0);
-    println!("| mPAcc | {:.2} % |", m.mpacc * 100.0);
-    println!("| invR | {:.2} % |", m.invr * 100.0);
-    println!();
-    println!("per-class IoU (classes in the ground truth):");
-    for (c, iou) in m.iou.iter().enumerate() {
-        if let Some(v) = iou {
-            println!("  {:>2} {:<14} {:6.2} %", c, NYU40[c], v * 100.0);
-        }
-    }
-
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    let step = (poses.len() / 3).max(1);
-    for i in (0..poses.len()).step_by(step).take(3) {
-        let path = a.out.join(format!("frame_{i:04}.png"));
-        let gt = &frames[i].1;
-        picture::side_by_side(
-            &path,
-            cam.width,
-            cam.height,
-            &[gt, &renders[i]],
-            render_color,
-        )?;
-        println!("wrote {} (ground truth | back-projection)", path.display());
-    }
-    let path = a.out.join("birdseye.png");
-    picture::birds_eye(&path, map.as_ref(), 2.2)?;
-    println!(
-        "wrote {} (semantic map from above, ceiling removed)",
-        path.display()
-    );
-    Ok(())
+    sndt_host::demo::run(&sndt_host::demo::DemoOptions {
+        out: a.out.clone(),
+        cell: a.cell,
+        scenes: a.scenes,
+        frames: a.frames,
+        constant_miss: a.constant_miss,
+    })
 }
 
 fn synth(a: &SynthArgs) -> Result<()> {
@@ -350,5 +303,99 @@ fn synth(a: &SynthArgs) -> Result<()> {
             m.mpacc * 100.0
         );
     }
+    Ok(())
+}
+
+fn map_command(a: &MapArgs) -> Result<()> {
+    use sndt_host::dataset::{open_spec, OpenOptions};
+    use sndt_host::evaluate::{evaluate, EvalOptions};
+    let options = OpenOptions {
+        split: Some(a.split.clone()),
+        paper_fy: a.paper_fy,
+        predictions: a.predictions.clone(),
+    };
+    let dataset = open_spec(&a.dataset, &options)?;
+    println!("sndt map: {}", dataset.describe());
+    let frames = dataset.frames().len();
+    let bar = progress(2 * frames as u64, "map+eval");
+    let eval = evaluate(
+        dataset.as_ref(),
+        &EvalOptions {
+            out: Some(a.out.clone()),
+            stride: a.stride,
+            save_maps: a.save_maps.then(|| a.out.join("maps")),
+            ..EvalOptions::new(Config::with_cell_size(a.cell), a.labels)
+        },
+        &|| bar.inc(1),
+    )?;
+    bar.finish_and_clear();
+    for t in &eval.trajectories {
+        println!(
+            "  {}: {} frames, {:.1} ms/frame, {} voxels, {} blocks, {} evicted",
+            t.name,
+            t.frames,
+            t.mean_ms(),
+            t.voxels,
+            t.blocks,
+            t.evicted
+        );
+    }
+    let table = eval.table();
+    println!(
+        "\ncell {:.0} cm, {:?} labels\n{table}",
+        a.cell * 100.0,
+        a.labels
+    );
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    std::fs::write(a.out.join("metrics.md"), &table)?;
+    std::fs::write(
+        a.out.join("metrics.json"),
+        serde_json::to_string_pretty(&eval.to_json())?,
+    )?;
+    println!(
+        "wrote {}/<scene>/<cam>/<NNNN>.png, metrics.json, metrics.md",
+        a.out.display()
+    );
+    Ok(())
+}
+
+fn export(a: &ExportArgs) -> Result<()> {
+    use sndt_host::dataset::{open_spec, OpenOptions};
+    use sndt_host::evaluate::{integrate_frame, load_snapshot, EvalMap};
+    let path = std::path::Path::new(&a.input);
+    let map: Box<EvalMap> = if path.is_file() {
+        load_snapshot(path)?
+    } else {
+        let dataset = open_spec(&a.input, &OpenOptions::default())?;
+        let trajectories = dataset.trajectories();
+        let (name, ids) = trajectories
+            .first()
+            .ok_or_else(|| anyhow::anyhow!("{}: no frames", a.input))?;
+        let mut map: Box<EvalMap> = sndt_host::boxed_map(Config::with_cell_size(a.cell))
+            .map_err(|e| anyhow::anyhow!("config: {e:?}"))?;
+        let bar = progress(ids.len() as u64, "map");
+        for id in ids {
+            integrate_frame(map.as_mut(), &dataset.load(id)?, a.labels, 1)?;
+            bar.inc(1);
+        }
+        bar.finish_and_clear();
+        println!("mapped {name}: {} frames", ids.len());
+        map
+    };
+    let es = sndt_host::export::ellipsoids(map.as_ref(), a.min_points);
+    match a.ellipsoids {
+        Some(s) => sndt_host::export::write_ellipsoids(&a.ply, &es, s)?,
+        None => sndt_host::export::write_points(&a.ply, &es)?,
+    }
+    println!(
+        "wrote {}: {} occupied Gaussians of {} voxels ({})",
+        a.ply.display(),
+        es.len(),
+        map.len(),
+        a.ellipsoids
+            .map_or("points at the means".to_string(), |s| format!(
+                "ellipsoids at {s} sigma"
+            ))
+    );
     Ok(())
 }

@@ -78,7 +78,9 @@ pub fn birds_eye<const V: usize, const B: usize, const C: usize>(
     let (z0, z1) = cols
         .iter()
         .fold((f32::MAX, f32::MIN), |a, c| (a.0.min(c.2), a.1.max(c.2)));
-    let s = (4.0 * 0.1 / h).clamp(2.0, 8.0) as u32; // pixels per voxel
+    // Pixels per voxel: at least 4 at 10 cm, and the longer side at least ~512 pixels.
+    let span = (x1 - x0 + 1).max(y1 - y0 + 1) as f32;
+    let s = ((4.0 * 0.1 / h).max(512.0 / span).clamp(2.0, 16.0)) as u32;
     let (w, hgt) = (((x1 - x0 + 1) as u32) * s, ((y1 - y0 + 1) as u32) * s);
     let mut top = vec![(f32::MIN, 0u8); ((x1 - x0 + 1) * (y1 - y0 + 1)) as usize];
     let cw = (x1 - x0 + 1) as usize;

@@ -493,6 +493,11 @@ fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<
     result
 }
 
+/// Writes a plain 8-bit grayscale PNG (atomically: temporary file, then rename).
+pub fn write_gray8(path: &Path, w: u32, h: u32, data: &[u8]) -> Result<()> {
+    write_png(path, w, h, png::BitDepth::Eight, data)
+}
+
 fn write_png(path: &Path, w: u32, h: u32, depth: png::BitDepth, data: &[u8]) -> Result<()> {
     write_atomic(path, |tmp| {
         let file = File::create(tmp).with_context(|| format!("{}: creating", tmp.display()))?;

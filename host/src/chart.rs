@@ -1,0 +1,90 @@
+//! Charts as SVG (plotters' SVG backend: text stays text, no font files needed).
+
+use anyhow::{anyhow, Result};
+use plotters::prelude::*;
+use std::path::Path;
+
+/// A grouped bar chart of per-class IoU (in %), one bar colour per series, over the
+/// classes that have a value in any series.
+///
+/// ```
+/// let dir = std::env::temp_dir().join(format!("sndt-chart-{}", std::process::id()));
+/// std::fs::create_dir_all(&dir).unwrap();
+/// let mut a = [None; 41];
+/// a[1] = Some(0.9);
+/// a[23] = Some(0.4);
+/// let path = dir.join("iou.svg");
+/// sndt_host::chart::iou_bars(&path, "IoU", &[("GT labels", &a)]).unwrap();
+/// let svg = std::fs::read_to_string(&path).unwrap();
+/// assert!(svg.contains("books") && svg.contains("wall"));
+/// # std::fs::remove_dir_all(&dir).unwrap();
+/// ```
+pub fn iou_bars(path: &Path, title: &str, series: &[(&str, &[Option<f64>; 41])]) -> Result<()> {
+    let classes: Vec<usize> = (1..=40)
+        .filter(|&c| series.iter().any(|(_, s)| s[c].is_some()))
+        .collect();
+    let width = (120 + 28 * classes.len() * series.len().max(1)).max(640) as u32;
+    let root = SVGBackend::new(path, (width, 480)).into_drawing_area();
+    let err = |e: DrawingAreaErrorKind<_>| anyhow!("{}: {e:?}", path.display());
+    root.fill(&WHITE).map_err(err)?;
+    let n = classes.len().max(1) as f64;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 20))
+        .margin(10)
+        .x_label_area_size(110)
+        .y_label_area_size(50)
+        .build_cartesian_2d(0f64..n, 0f64..100f64)
+        .map_err(err)?;
+    let names = classes.clone();
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(classes.len() * 2 + 1)
+        .x_label_formatter(&|x| {
+            let i = x.floor() as usize;
+            if (x - x.floor() - 0.5).abs() < 1e-6 && i < names.len() {
+                crate::colors::NYU40[names[i]].to_string()
+            } else {
+                String::new()
+            }
+        })
+        .x_label_style(
+            ("sans-serif", 12)
+                .into_font()
+                .transform(FontTransform::Rotate90),
+        )
+        .y_desc("IoU (%)")
+        .draw()
+        .map_err(err)?;
+    let palette = [
+        RGBColor(31, 119, 180),
+        RGBColor(255, 127, 14),
+        RGBColor(44, 160, 44),
+        RGBColor(214, 39, 40),
+    ];
+    let k = series.len().max(1) as f64;
+    for (j, (name, values)) in series.iter().enumerate() {
+        let colour = palette[j % palette.len()];
+        let bars = classes.iter().enumerate().filter_map(|(i, &c)| {
+            let v = values[c]? * 100.0;
+            let x0 = i as f64 + 0.1 + 0.8 * j as f64 / k;
+            Some(Rectangle::new(
+                [(x0, 0.0), (x0 + 0.8 / k, v)],
+                colour.filled(),
+            ))
+        });
+        chart
+            .draw_series(bars)
+            .map_err(err)?
+            .label(*name)
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], colour.filled()));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(err)?;
+    root.present().map_err(err)?;
+    Ok(())
+}
