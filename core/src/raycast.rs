@@ -6,17 +6,31 @@
 //! enters the ellipsoid of Mahalanobis radius `r`: with `a = u^T S^-1 u`,
 //! `b = 2 u^T S^-1 (s - mu)`, `c = (s - mu)^T S^-1 (s - mu)`, the ray's squared distance is
 //! `a t^2 + b t + c`, minimal `D2 = c - b^2 / 4a` at `t* = -b / 2a`, and it enters at
-//! `t = t* - sqrt((r^2 - D2) / a)`. Ellipsoids that contain the origin are skipped.
+//! `t = t* - sqrt((r^2 - D2) / a)`. Ellipsoids that contain the origin are skipped. The hit
+//! is the smallest `(t, key)`, so the order in which candidates are examined does not matter.
+//!
+//! Speed (the same result as examining every cell one by one):
+//!
+//! * a face (or the first 3x3x3 cube) is intersected with the `surface` masks of the at most
+//!   four blocks it touches, so only cells that hold an NDT voxel are looked at;
+//! * [`Map::render`] also keeps, per block, the mask of cells that have a surface cell
+//!   within one cell (the block's surface dilated by one, its 26 neighbours included): a DDA
+//!   voxel outside that mask has no candidate in its new face, and the face is skipped;
+//! * prepared Gaussians (inverse covariance, offset to the origin, `c`, class, validity) are
+//!   cached by (block slot, cell), so a cache hit needs no voxel lookup;
+//! * pixels are rendered in 8x8 tiles, whose rays visit nearly the same voxels.
 
-use crate::block::Block;
+use crate::block::bits;
 use crate::dda::Dda;
-use crate::integrate::Pinhole;
-use crate::key::VoxelKey;
+use crate::integrate::{floor_abs, Pinhole};
+use crate::key::{hash, VoxelKey};
 use crate::map::{argmax, Map};
-use crate::table::Table;
-use crate::voxel::PrepCache;
 use crate::Error;
-use nalgebra::{Isometry3, Point3, Vector3};
+use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
+
+#[cfg(test)]
+#[path = "raycast_tests.rs"]
+mod raycast_tests;
 
 /// Where a ray first enters an occupied Gaussian.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -32,6 +46,123 @@ pub struct RayHit {
 
 /// Label written by [`Map::render`] where a ray hits nothing (free space or unknown).
 pub const INVALID_LABEL: u8 = 255;
+
+/// Side of the square pixel tiles [`Map::render`] walks (cache locality only).
+const TILE: u32 = 8;
+
+/// Prepared-Gaussian cache entries of one render (64 bytes each).
+const RENDER_PREPS: usize = 512;
+/// Dilated-surface-mask cache entries of one render (16 bytes each).
+const RENDER_DILATED: usize = 512;
+/// Prepared-Gaussian cache entries of one `raycast`.
+const RAY_PREPS: usize = 4;
+
+/// A voxel's Gaussian prepared for rays from one origin.
+#[derive(Clone, Copy)]
+struct Prep {
+    /// `(block slot + 1) << 6 | cell`; 0 = empty entry.
+    tag: u64,
+    /// Inverse covariance (eigenvalue floor applied).
+    inv: Matrix3<f32>,
+    /// Origin minus mean.
+    d: Vector3<f32>,
+    /// `d^T inv d`.
+    c: f32,
+    /// Class of the voxel (0 = void).
+    class: u8,
+    /// False when the voxel cannot be hit: missing, `n < n_min`, or the origin is inside.
+    ok: bool,
+}
+
+/// Everything cached while the map does not change and the origin stays put (one render
+/// call, or one raycast). `G` prepared Gaussians; `D` dilated masks (0 = no skipping).
+struct Scratch<const G: usize, const D: usize> {
+    preps: [Prep; G],
+    /// `(packed block key, dilated surface mask)`, key 0 = empty.
+    dilated: [(u64, u64); D],
+    /// `(packed block key, slot + 1 or 0 when absent, surface mask)` by the parity of the
+    /// block coordinates: the blocks of a 2x2x2 neighbourhood never evict each other.
+    blocks: [(u64, u32, u64); 8],
+}
+
+impl<const G: usize, const D: usize> Scratch<G, D> {
+    fn new() -> Self {
+        const { assert!(G >= 1, "at least one prepared-Gaussian entry") };
+        let empty = Prep {
+            tag: 0,
+            inv: Matrix3::zeros(),
+            d: Vector3::zeros(),
+            c: 0.0,
+            class: 0,
+            ok: false,
+        };
+        Scratch {
+            preps: [empty; G],
+            dilated: [(0, 0); D],
+            blocks: [(0, 0, 0); 8],
+        }
+    }
+}
+
+/// Per-ray state.
+struct Ray {
+    origin: Vector3<f32>,
+    u: Vector3<f32>,
+    max_t: f32,
+    r2: f32,
+    best: Option<RayHit>,
+}
+
+/// Packed key of the block at block coordinates `b`, if it holds any valid voxel key.
+#[inline]
+fn block_packed(b: [i32; 3]) -> Option<u64> {
+    // Cell 3 of the block is valid iff some cell of the block is: block -8192 holds
+    // -32768 (invalid) to -32765, block 8191 ends at 32767.
+    let c = |v: i32| v.saturating_mul(4).saturating_add(3);
+    VoxelKey::from_ints(c(b[0]), c(b[1]), c(b[2])).map(|k| k.block())
+}
+
+/// Cells of a block whose coordinates lie in `lo..=hi` (block-local) on every axis.
+#[inline]
+fn box_mask(lo: [i32; 3], hi: [i32; 3]) -> u64 {
+    // Contiguous bit run `[l * w, (h + 1) * w)` with `0 <= l`, `h <= 3`, `w * 4 <= 64`.
+    let run = |l: i32, h: i32, w: u32| -> u64 {
+        let (l, h) = (l.clamp(0, 3) as u32, h.clamp(0, 3) as u32);
+        if l > h {
+            return 0;
+        }
+        (u64::MAX >> (64 - (h + 1) * w)) & (u64::MAX << (l * w))
+    };
+    let x = run(lo[0], hi[0], 1) * 0x1111_1111_1111_1111;
+    let y = run(lo[1], hi[1], 4) * 0x0001_0001_0001_0001;
+    let z = run(lo[2], hi[2], 16);
+    x & y & z
+}
+
+/// Cells with the given block-local coordinate on one axis.
+const LAYER: [[u64; 4]; 3] = {
+    let mut t = [[0u64; 4]; 3];
+    let mut cell = 0;
+    while cell < 64 {
+        t[0][cell & 3] |= 1 << cell;
+        t[1][(cell >> 2) & 3] |= 1 << cell;
+        t[2][(cell >> 4) & 3] |= 1 << cell;
+        cell += 1;
+    }
+    t
+};
+
+/// Dilates mask `m` by one cell along `axis` inside the block, adding the neighbouring
+/// blocks' boundary layers (`below` on the low side, `above` on the high side).
+#[inline]
+fn dilate(m: u64, below: u64, above: u64, axis: usize) -> u64 {
+    let s = [1u32, 4, 16][axis];
+    let (first, last) = (LAYER[axis][0], LAYER[axis][3]);
+    m | ((m & !last) << s)
+        | ((m & !first) >> s)
+        | ((above & first) << (3 * s))
+        | ((below & last) >> (3 * s))
+}
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// The first occupied Gaussian the ray from `origin` along `dir` enters within `max_t`
@@ -51,12 +182,13 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// assert!(map.raycast(&Point3::new(0.05, 0.05, 0.0), &-Vector3::z(), 3.0).is_none());
     /// ```
     pub fn raycast(&self, origin: &Point3<f32>, dir: &Vector3<f32>, max_t: f32) -> Option<RayHit> {
-        self.raycast_cached(&mut PrepCache::<8>::new(), origin, dir, max_t)
+        self.raycast_in(&mut Scratch::<RAY_PREPS, 0>::new(), origin, dir, max_t)
     }
 
-    fn raycast_cached<const N: usize>(
+    /// [`Map::raycast`] with caches that stay valid while `origin` is unchanged.
+    fn raycast_in<const G: usize, const D: usize>(
         &self,
-        cache: &mut PrepCache<N>,
+        s: &mut Scratch<G, D>,
         origin: &Point3<f32>,
         dir: &Vector3<f32>,
         max_t: f32,
@@ -74,116 +206,273 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let o = [origin.x * inv, origin.y * inv, origin.z * inv];
         let k = [start.x as i32, start.y as i32, start.z as i32];
         let mut dda = Dda::new(o, [u.x, u.y, u.z], k);
-        let mut probe = Probe {
-            blocks: &self.blocks,
-            cache,
-            block_cache: [(0, 0); 8],
-            best: None,
+        let mut ray = Ray {
             origin: Vector3::new(origin.x, origin.y, origin.z),
             u,
             max_t,
+            r2: cfg.render_radius * cfg.render_radius,
+            best: None,
         };
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    self.examine(&mut probe, [k[0] + dx, k[1] + dy, k[2] + dz]);
-                }
-            }
+        // Block coordinates and dilated mask of the DDA voxel's block (none yet).
+        let mut near = ([i32::MIN; 3], 0u64);
+        if self.near_surface(s, &mut near, k) {
+            self.examine_box(s, &mut ray, k.map(|v| v - 1), k.map(|v| v + 1));
         }
         // No ray can walk farther than across the whole key range.
         let max_t = max_t.min(h * 4.0 * (crate::KEY_LIMIT + 1) as f32);
         let max_steps = ((max_t / h) as u32).saturating_mul(3).saturating_add(12);
+        let reach = 2.5 * h;
         for _ in 0..max_steps {
             let (a, t) = dda.next_axis();
             let t_enter = t * h;
-            if t_enter > max_t + 2.5 * h {
+            if t_enter > max_t + reach {
                 break;
             }
-            if let Some(best) = probe.best {
-                if t_enter > best.t + 2.5 * h {
+            if let Some(best) = ray.best {
+                if t_enter > best.t + reach {
                     break;
                 }
             }
             dda.advance(a);
+            if !self.near_surface(s, &mut near, dda.k) {
+                continue;
+            }
             // Only the 9 cells of the neighbourhood's new face are unseen.
-            let (b, c) = ((a + 1) % 3, (a + 2) % 3);
-            for db in -1..=1 {
-                for dc in -1..=1 {
-                    let mut cell = dda.k;
-                    cell[a] += dda.step(a);
-                    cell[b] += db;
-                    cell[c] += dc;
-                    self.examine(&mut probe, cell);
+            let (mut lo, mut hi) = (dda.k.map(|v| v - 1), dda.k.map(|v| v + 1));
+            let f = dda.k[a] + dda.step(a);
+            lo[a] = f;
+            hi[a] = f;
+            self.examine_box(s, &mut ray, lo, hi);
+        }
+        ray.best
+    }
+
+    /// Whether the 3x3x3 neighbourhood of voxel `k` may hold a surface cell. `near` caches
+    /// the dilated mask of the block last asked about.
+    #[inline]
+    fn near_surface<const G: usize, const D: usize>(
+        &self,
+        s: &mut Scratch<G, D>,
+        near: &mut ([i32; 3], u64),
+        k: [i32; 3],
+    ) -> bool {
+        if D == 0 {
+            return true;
+        }
+        let b = k.map(|v| v >> 2);
+        if b != near.0 {
+            *near = (b, self.dilated(s, b));
+        }
+        let cell = (k[0] & 3) | ((k[1] & 3) << 2) | ((k[2] & 3) << 4);
+        (near.1 >> cell) & 1 != 0
+    }
+
+    /// Cells of block `b` with a surface cell within one cell (in any block), through the
+    /// scratch's cache; all ones for blocks outside the key range.
+    fn dilated<const G: usize, const D: usize>(&self, s: &mut Scratch<G, D>, b: [i32; 3]) -> u64 {
+        let Some(packed) = block_packed(b) else {
+            return u64::MAX;
+        };
+        let i = hash(packed) as usize % D.max(1);
+        if let Some(e) = s.dilated.get(i) {
+            if e.0 == packed {
+                return e.1;
+            }
+        }
+        // Surface masks of the 27 blocks around b, [z][y][x] with offsets -1..=1.
+        let mut m = [[[0u64; 3]; 3]; 3];
+        for (dz, plane) in m.iter_mut().enumerate() {
+            for (dy, row) in plane.iter_mut().enumerate() {
+                for (dx, mask) in row.iter_mut().enumerate() {
+                    let nb = [
+                        b[0] + dx as i32 - 1,
+                        b[1] + dy as i32 - 1,
+                        b[2] + dz as i32 - 1,
+                    ];
+                    *mask = block_packed(nb)
+                        .and_then(|p| self.blocks.find(p))
+                        .and_then(|slot| self.blocks.slots.get(slot))
+                        .map_or(0, |blk| blk.surface);
                 }
             }
         }
-        probe.best
+        // Separable dilation: along x in all 9 rows, along y in the 3 planes, then along z.
+        let mut plane_masks = [0u64; 3];
+        for (plane, out) in m.iter().zip(plane_masks.iter_mut()) {
+            let r = plane.map(|row| dilate(row[1], row[0], row[2], 0));
+            *out = dilate(r[1], r[0], r[2], 1);
+        }
+        let mask = dilate(plane_masks[1], plane_masks[0], plane_masks[2], 2);
+        if let Some(e) = s.dilated.get_mut(i) {
+            *e = (packed, mask);
+        }
+        mask
     }
 
-    fn examine<const N: usize>(&self, p: &mut Probe<'_, B, N>, k: [i32; 3]) {
-        let Some(key) = VoxelKey::from_ints(k[0], k[1], k[2]) else {
+    /// Examines every surface cell in the box `lo..=hi` (voxel keys, at most 2 blocks wide
+    /// on each axis).
+    fn examine_box<const G: usize, const D: usize>(
+        &self,
+        s: &mut Scratch<G, D>,
+        ray: &mut Ray,
+        lo: [i32; 3],
+        hi: [i32; 3],
+    ) {
+        let (b0, b1) = (lo.map(|v| v >> 2), hi.map(|v| v >> 2));
+        for bz in b0[2]..=b1[2] {
+            for by in b0[1]..=b1[1] {
+                for bx in b0[0]..=b1[0] {
+                    let b = [bx, by, bz];
+                    let Some((slot, surface)) = self.block_in(s, b) else {
+                        continue;
+                    };
+                    if surface == 0 {
+                        continue;
+                    }
+                    let base = b.map(|v| v * 4);
+                    let mask = surface
+                        & box_mask(
+                            [lo[0] - base[0], lo[1] - base[1], lo[2] - base[2]],
+                            [hi[0] - base[0], hi[1] - base[1], hi[2] - base[2]],
+                        );
+                    for cell in bits(mask) {
+                        let k = [
+                            base[0] + (cell & 3) as i32,
+                            base[1] + ((cell >> 2) & 3) as i32,
+                            base[2] + ((cell >> 4) & 3) as i32,
+                        ];
+                        if let Some(key) = VoxelKey::from_ints(k[0], k[1], k[2]) {
+                            self.examine(s, ray, slot, cell, key);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Slot and surface mask of the block at block coordinates `b`, through the parity cache.
+    #[inline]
+    fn block_in<const G: usize, const D: usize>(
+        &self,
+        s: &mut Scratch<G, D>,
+        b: [i32; 3],
+    ) -> Option<(usize, u64)> {
+        let packed = block_packed(b)?;
+        let i = ((b[0] & 1) | ((b[1] & 1) << 1) | ((b[2] & 1) << 2)) as usize;
+        let e = s.blocks.get_mut(i)?;
+        if e.0 != packed {
+            let slot = self.blocks.find(packed);
+            let surface = slot
+                .and_then(|sl| self.blocks.slots.get(sl))
+                .map_or(0, |blk| blk.surface);
+            *e = (packed, slot.map_or(0, |sl| sl as u32 + 1), surface);
+        }
+        if e.1 == 0 {
+            return None;
+        }
+        Some(((e.1 - 1) as usize, e.2))
+    }
+
+    /// Tests the surface cell `cell` of the block in `slot` (voxel `key`) against the ray.
+    #[inline]
+    fn examine<const G: usize, const D: usize>(
+        &self,
+        s: &mut Scratch<G, D>,
+        ray: &mut Ray,
+        slot: usize,
+        cell: u32,
+        key: VoxelKey,
+    ) {
+        let Some(blk) = self.blocks.slots.get(slot) else {
             return;
         };
-        let packed = key.block();
-        // Blocks of a 2x2x2 neighbourhood differ in the parity of some coordinate, so a
-        // cache indexed by the three parity bits never thrashes inside one (misses too).
-        let i = (((k[0] >> 2) & 1) | (((k[1] >> 2) & 1) << 1) | (((k[2] >> 2) & 1) << 2)) as usize;
-        let (tag, found) = p.block_cache[i];
-        let found = if tag == packed {
-            found
-        } else {
-            let f = p.blocks.find(packed).map_or(0, |s| s as u32 + 1);
-            p.block_cache[i] = (packed, f);
-            f
-        };
-        if found == 0 {
+        if blk.cells.get(cell as usize).is_none_or(|&l| l <= 0) {
             return;
         }
-        let bs = (found - 1) as usize;
-        let b = &p.blocks.slots[bs];
-        let cell = key.cell();
-        if b.surface & (1u64 << cell) == 0 || b.cells[cell as usize] <= 0 {
-            return;
-        }
-        let Some(vs) = self.voxels.find(key.packed()) else {
+        let tag = ((slot as u64 + 1) << 6) | cell as u64;
+        let i = (tag.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40) as usize % G;
+        let Some(g) = s.preps.get_mut(i) else {
             return;
         };
-        let v = &self.voxels.slots[vs];
-        let cfg = &self.config;
-        if v.n < cfg.n_min {
+        if g.tag != tag {
+            *g = self.prep(tag, &key, &ray.origin, ray.r2);
+        }
+        if !g.ok {
             return;
         }
-        let g = p.cache.get(vs, v, cfg);
-        let d = p.origin - g.mean;
-        let w = g.inv * p.u;
-        let a = p.u.dot(&w);
-        let bq = 2.0 * w.dot(&d);
-        let c = d.dot(&(g.inv * d));
+        let w = g.inv * ray.u;
+        let a = ray.u.dot(&w);
+        let bq = 2.0 * w.dot(&g.d);
         if a.is_nan() || a <= 0.0 {
             return;
         }
-        let r2 = cfg.render_radius * cfg.render_radius;
-        let d2 = c - bq * bq / (4.0 * a);
-        if d2 > r2 || c <= r2 {
-            // Missed, or the origin is inside the ellipsoid.
+        // Squared Mahalanobis distance of the ray's closest approach, evaluated at that
+        // point (e = d + t* u) rather than as `c - b^2/4a`: for thin surface Gaussians `c`
+        // reaches ~1e7 and the subtraction cancels to noise in f32 (the f64 reference
+        // showed it flipping hits at 5 cm).
+        let t_star = -bq / (2.0 * a);
+        let e = g.d + ray.u * t_star;
+        let d2 = e.dot(&(g.inv * e));
+        if d2 > ray.r2 {
             return;
         }
-        let t = -bq / (2.0 * a) - libm::sqrtf((r2 - d2) / a);
-        if !(t >= 0.0 && t <= p.max_t) {
+        let t = t_star - libm::sqrtf((ray.r2 - d2) / a);
+        if !(t >= 0.0 && t <= ray.max_t) {
             return;
         }
-        if p.best
+        if ray
+            .best
             .is_none_or(|best| t < best.t || (t == best.t && key < best.key))
         {
-            let class = argmax(&v.hist).map_or(0, |(c, _)| c);
-            p.best = Some(RayHit { t, class, key });
+            ray.best = Some(RayHit {
+                t,
+                class: g.class,
+                key,
+            });
         }
+    }
+
+    /// The prepared Gaussian of voxel `key` for rays from `origin`.
+    fn prep(&self, tag: u64, key: &VoxelKey, origin: &Vector3<f32>, r2: f32) -> Prep {
+        let cfg = &self.config;
+        let mut p = Prep {
+            tag,
+            inv: Matrix3::zeros(),
+            d: Vector3::zeros(),
+            c: 0.0,
+            class: 0,
+            ok: false,
+        };
+        let Some(v) = self
+            .voxels
+            .find(key.packed())
+            .and_then(|vs| self.voxels.slots.get(vs))
+        else {
+            return p;
+        };
+        if v.n < cfg.n_min {
+            return p;
+        }
+        let g = v
+            .gaussian(cfg.cell_size, cfg.quant_step())
+            .prepare(cfg.eigen_ratio, floor_abs(cfg.cell_size));
+        p.d = origin - g.mean;
+        p.inv = g.inv;
+        p.c = p.d.dot(&(g.inv * p.d));
+        p.class = argmax(&v.hist).map_or(0, |(c, _)| c);
+        // An ellipsoid containing the origin is never hit (NaN falls through to the ray test,
+        // which rejects it).
+        p.ok = !matches!(
+            p.c.partial_cmp(&r2),
+            Some(core::cmp::Ordering::Less | core::cmp::Ordering::Equal)
+        );
+        p
     }
 
     /// Renders what a pinhole camera at `pose` (camera to world, OpenCV axes) sees:
     /// per pixel the class of the first Gaussian hit (0 void, [`INVALID_LABEL`] for
     /// nothing) and its distance in metres along the ray (0 for nothing). Rays end at
-    /// `config.max_range`.
+    /// `config.max_range`. Each pixel gets exactly what [`Map::raycast`] returns for its ray.
     ///
     /// ```
     /// use sndt_core::*;
@@ -220,34 +509,34 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         }
         let rot = pose.rotation.to_rotation_matrix();
         let origin = Point3::from(t);
-        let w = camera.width as usize;
-        // Neighbouring pixels examine the same voxels: keep their prepared Gaussians.
-        let mut cache = PrepCache::<128>::new();
-        for (i, (l, d)) in labels.iter_mut().zip(distance.iter_mut()).enumerate() {
-            let r = camera.ray((i % w) as u32, (i / w) as u32);
-            let dir = rot * Vector3::new(r[0], r[1], r[2]);
-            match self.raycast_cached(&mut cache, &origin, &dir, self.config.max_range) {
-                Some(hit) => {
-                    *l = hit.class;
-                    *d = hit.t;
-                }
-                None => {
-                    *l = INVALID_LABEL;
-                    *d = 0.0;
+        let (w, h) = (camera.width, camera.height);
+        // The origin is fixed for the whole image: prepared Gaussians and dilated masks stay
+        // valid (about 41 KiB of stack: 512 x 64 B Gaussians, 512 x 16 B masks; host use).
+        let mut s = Scratch::<RENDER_PREPS, RENDER_DILATED>::new();
+        for ty in (0..h).step_by(TILE as usize) {
+            for tx in (0..w).step_by(TILE as usize) {
+                for row in ty..h.min(ty.saturating_add(TILE)) {
+                    for col in tx..w.min(tx.saturating_add(TILE)) {
+                        let i = row as usize * w as usize + col as usize;
+                        let (Some(l), Some(d)) = (labels.get_mut(i), distance.get_mut(i)) else {
+                            continue;
+                        };
+                        let r = camera.ray(col, row);
+                        let dir = rot * Vector3::new(r[0], r[1], r[2]);
+                        match self.raycast_in(&mut s, &origin, &dir, self.config.max_range) {
+                            Some(hit) => {
+                                *l = hit.class;
+                                *d = hit.t;
+                            }
+                            None => {
+                                *l = INVALID_LABEL;
+                                *d = 0.0;
+                            }
+                        }
+                    }
                 }
             }
         }
         Ok(())
     }
-}
-
-struct Probe<'a, const B: usize, const N: usize> {
-    blocks: &'a Table<Block, B>,
-    cache: &'a mut PrepCache<N>,
-    /// `(packed block key, slot + 1 or 0 when absent)` by coordinate parity.
-    block_cache: [(u64, u32); 8],
-    best: Option<RayHit>,
-    origin: Vector3<f32>,
-    u: Vector3<f32>,
-    max_t: f32,
 }

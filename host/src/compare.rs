@@ -1,0 +1,756 @@
+//! `sndt compare`: the core's fixed-point map against the f64 reference.
+//!
+//! The same frames go into a [`sndt_core::Map`] and a [`RefMap`] per cell size; then the
+//! maps are compared voxel by voxel (surface voxel sets, voxel means, covariances,
+//! occupancy states, class argmax) and both are back-projected into every frame and
+//! scored with the paper's metrics ([`crate::eval`]). The issue's tolerances at 10 cm
+//! ([`TOLERANCES`]) are checked by the `reference` test on a fixed synthetic trajectory.
+//!
+//! ```
+//! use sndt_core::{Config, Pinhole};
+//! use sndt_host::compare::{compare, Options};
+//! use sndt_host::dataset::Dataset;
+//! use sndt_host::synth::{SynthOptions, Synthetic};
+//! let camera = Pinhole { fx: 55.4, fy: 55.4, cx: 32.0, cy: 24.0, width: 64, height: 48 };
+//! let split = Synthetic::new(SynthOptions { scenes: 1, frames: 2, camera, predictions: false,
+//!                                           ..Default::default() }).unwrap();
+//! let frames: Vec<_> = split.frames().iter().map(|id| split.load(id).unwrap()).collect();
+//! let r = compare(&frames, &Config::DEFAULT, &Options::default()).unwrap();
+//! assert_eq!((r.only_core, r.only_ref), (0, 0));
+//! assert!(r.mean_error_mm.max < 1.4); // at most half a quantum (h/128) per axis
+//! ```
+
+use crate::dataset::{self, Dataset, Frame, LabelSource, Rays};
+use crate::eval::{Confusion, Metrics};
+use crate::reference::{Key, RefMap};
+use anyhow::{bail, Context, Result};
+use rayon::prelude::*;
+use sndt_core::{Config, Map, MapStats, MissModel, Occupancy, VoxelKey, INVALID_LABEL};
+use std::borrow::Cow;
+use std::collections::HashSet;
+use std::fmt;
+use std::path::Path;
+use std::time::Instant;
+
+/// Classes of the compared maps (NYU40).
+pub const CLASSES: usize = 40;
+
+/// The core map used by the comparison: 2^19 surface voxels, 2^17 blocks (~71 MiB), large
+/// enough that a trajectory of a room does not evict (evictions are reported).
+pub type CompareMap = Map<{ 1 << 19 }, { 1 << 17 }, CLASSES>;
+
+/// What feeds the maps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Options {
+    /// Labels attached to the points.
+    pub labels: LabelSource,
+    /// Every `stride`-th pixel in both directions is integrated (rendering uses all).
+    pub stride: u32,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            labels: LabelSource::Gt,
+            stride: 1,
+        }
+    }
+}
+
+/// The issue's tolerances for the core against the reference (at 10 cm, on a synthetic
+/// trajectory).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tolerances {
+    /// Largest mean voxel-mean error, mm.
+    pub mean_error_mm: f64,
+    /// Largest 99th percentile of the voxel-mean error, mm.
+    pub p99_error_mm: f64,
+    /// Largest median relative covariance error (fraction).
+    pub covariance_median: f64,
+    /// Smallest occupancy-state agreement (fraction).
+    pub occupancy: f64,
+    /// Smallest class-argmax agreement (fraction).
+    pub class: f64,
+    /// Largest |mIoU(core) - mIoU(reference)| in percentage points.
+    pub miou_points: f64,
+    /// Largest |invR(core) - invR(reference)| in percentage points.
+    pub invr_points: f64,
+}
+
+/// The tolerances of issue 4.
+pub const TOLERANCES: Tolerances = Tolerances {
+    mean_error_mm: 1.0,
+    p99_error_mm: 2.0,
+    covariance_median: 0.02,
+    occupancy: 0.995,
+    class: 0.995,
+    miou_points: 0.2,
+    invr_points: 0.1,
+};
+
+/// How many of `total` compared items agree.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Agreement {
+    /// Items that agree.
+    pub same: u64,
+    /// Items compared.
+    pub total: u64,
+}
+
+impl Agreement {
+    /// `same / total` (1 when nothing was compared).
+    ///
+    /// ```
+    /// let a = sndt_host::compare::Agreement { same: 199, total: 200 };
+    /// assert_eq!(a.fraction(), 0.995);
+    /// ```
+    pub fn fraction(&self) -> f64 {
+        if self.total == 0 {
+            1.0
+        } else {
+            self.same as f64 / self.total as f64
+        }
+    }
+
+    fn add(&mut self, same: bool) {
+        self.same += same as u64;
+        self.total += 1;
+    }
+}
+
+/// Summary of a set of non-negative values.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Spread {
+    /// Number of values.
+    pub count: usize,
+    /// Arithmetic mean.
+    pub mean: f64,
+    /// Median (nearest rank).
+    pub median: f64,
+    /// 99th percentile (nearest rank).
+    pub p99: f64,
+    /// Largest value.
+    pub max: f64,
+}
+
+impl Spread {
+    /// Summarises `values` (any order; NaNs sort last).
+    ///
+    /// ```
+    /// let s = sndt_host::compare::Spread::of((1..=200).map(f64::from).collect());
+    /// assert_eq!((s.count, s.median, s.p99, s.max), (200, 100.0, 198.0, 200.0));
+    /// assert_eq!(s.mean, 100.5);
+    /// ```
+    pub fn of(mut values: Vec<f64>) -> Spread {
+        if values.is_empty() {
+            return Spread::default();
+        }
+        values.sort_by(|a, b| a.total_cmp(b));
+        let n = values.len();
+        let rank = |q: f64| values[((q * n as f64).ceil() as usize).clamp(1, n) - 1];
+        Spread {
+            count: n,
+            mean: values.iter().sum::<f64>() / n as f64,
+            median: rank(0.5),
+            p99: rank(0.99),
+            max: values[n - 1],
+        }
+    }
+}
+
+/// Back-projection scores of both maps over all frames (DESIGN.md section 4).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BackProjection {
+    /// The core's map.
+    pub core: Metrics,
+    /// The reference map.
+    pub reference: Metrics,
+    /// Pixels (with ground-truth depth < 20 m) where both renders give the same label.
+    pub pixels: Agreement,
+}
+
+/// The comparison at one cell size.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellReport {
+    /// Voxel edge, metres.
+    pub cell_size: f32,
+    /// Surface voxels only the core has.
+    pub only_core: usize,
+    /// Surface voxels only the reference has.
+    pub only_ref: usize,
+    /// Surface voxels both have.
+    pub both: usize,
+    /// Voxels in both whose point counts differ (should be 0 without evictions).
+    pub count_mismatch: usize,
+    /// `|mean(core) - mean(ref)|` over the voxels in both, millimetres.
+    pub mean_error_mm: Spread,
+    /// `||Sigma(core) - Sigma(ref)||_F / ||Sigma(ref)||_F` over the voxels in both with a
+    /// valid Gaussian (`n >= n_min`) and a non-zero reference covariance (fraction).
+    pub covariance_error: Spread,
+    /// Occupancy states (free / occupied / unknown) over every voxel either map observed.
+    pub occupancy: Agreement,
+    /// Occupancy states over the surface voxels both have.
+    pub surface_occupancy: Agreement,
+    /// Class argmax over the surface voxels both have that have votes in either.
+    pub class: Agreement,
+    /// Core voxels whose largest histogram bin is shared by several classes (typically
+    /// bins saturated at 255 within one frame): their argmax is the lowest class id.
+    pub core_class_ties: usize,
+    /// Back-projection scores, when the frames have ground-truth labels.
+    pub back_projection: Option<BackProjection>,
+    /// The core map's totals (evictions and dropped updates make the maps differ).
+    pub core_stats: MapStats,
+    /// Seconds the core spent integrating.
+    pub core_seconds: f64,
+    /// Seconds the reference spent integrating.
+    pub reference_seconds: f64,
+}
+
+impl CellReport {
+    /// The tolerances this report misses, one line each (empty when all hold).
+    pub fn violations(&self, tol: &Tolerances) -> Vec<String> {
+        let mut out = Vec::new();
+        let mut check = |ok: bool, what: String| {
+            if !ok {
+                out.push(what);
+            }
+        };
+        let e = &self.mean_error_mm;
+        check(
+            e.mean <= tol.mean_error_mm,
+            format!("mean error {:.3} mm > {} mm", e.mean, tol.mean_error_mm),
+        );
+        check(
+            e.p99 <= tol.p99_error_mm,
+            format!("p99 error {:.3} mm > {} mm", e.p99, tol.p99_error_mm),
+        );
+        check(
+            self.covariance_error.median <= tol.covariance_median,
+            format!(
+                "covariance median relative error {:.3} % > {} %",
+                self.covariance_error.median * 100.0,
+                tol.covariance_median * 100.0
+            ),
+        );
+        check(
+            self.occupancy.fraction() >= tol.occupancy,
+            format!(
+                "occupancy agreement {:.3} % < {} %",
+                self.occupancy.fraction() * 100.0,
+                tol.occupancy * 100.0
+            ),
+        );
+        check(
+            self.class.fraction() >= tol.class,
+            format!(
+                "class agreement {:.3} % < {} %",
+                self.class.fraction() * 100.0,
+                tol.class * 100.0
+            ),
+        );
+        if let Some(b) = &self.back_projection {
+            let dm = (b.core.miou - b.reference.miou) * 100.0;
+            let di = (b.core.invr - b.reference.invr) * 100.0;
+            check(
+                dm.abs() <= tol.miou_points,
+                format!("|dmIoU| {:.3} points > {}", dm.abs(), tol.miou_points),
+            );
+            check(
+                di.abs() <= tol.invr_points,
+                format!("|dinvR| {:.3} points > {}", di.abs(), tol.invr_points),
+            );
+        }
+        out
+    }
+}
+
+/// The comparison at every cell size.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Report {
+    /// What was compared (dataset, trajectory, frames).
+    pub source: String,
+    /// Frames integrated.
+    pub frames: usize,
+    /// Points integrated per map (after the stride).
+    pub points: u64,
+    /// The options used.
+    pub options: Options,
+    /// The miss model used.
+    pub miss_model: MissModel,
+    /// One report per cell size, in the order asked.
+    pub cells: Vec<CellReport>,
+}
+
+/// Compares the core and the reference on `frames` at `config.cell_size`.
+pub fn compare(frames: &[Frame], config: &Config, options: &Options) -> Result<CellReport> {
+    let report = compare_cells("frames".into(), frames.len(), &[*config], options, |i| {
+        Ok(Cow::Borrowed(&frames[i]))
+    })?;
+    Ok(report.cells.into_iter().next().expect("one cell size"))
+}
+
+/// Both maps at one cell size, with their evaluation state.
+struct Pair {
+    config: Config,
+    core: Box<CompareMap>,
+    reference: RefMap,
+    core_seconds: f64,
+    reference_seconds: f64,
+    core_confusion: Confusion,
+    ref_confusion: Confusion,
+    pixels: Agreement,
+    evaluated: bool,
+}
+
+/// Compares the core and the reference at every configuration in `configs` (usually the
+/// same parameters at several cell sizes) on `count` frames read by `load` (called twice
+/// per frame: once to integrate, once to back-project, so frames need not all be in
+/// memory). Cell sizes run in parallel.
+pub fn compare_cells<'f>(
+    source: String,
+    count: usize,
+    configs: &[Config],
+    options: &Options,
+    mut load: impl FnMut(usize) -> Result<Cow<'f, Frame>>,
+) -> Result<Report> {
+    let mut pairs = configs
+        .iter()
+        .map(|c| {
+            Ok(Pair {
+                config: *c,
+                core: crate::boxed_map(*c).map_err(|e| anyhow::anyhow!("config {c:?}: {e:?}"))?,
+                reference: RefMap::new(*c, CLASSES),
+                core_seconds: 0.0,
+                reference_seconds: 0.0,
+                core_confusion: Confusion::default(),
+                ref_confusion: Confusion::default(),
+                pixels: Agreement::default(),
+                evaluated: false,
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+
+    let bar = crate::progress(count as u64, "integrate");
+    let mut points_total = 0u64;
+    for i in 0..count {
+        let frame = load(i)?;
+        let points = frame.camera_points(options.labels, options.stride);
+        points_total += points.len() as u64;
+        pairs.par_iter_mut().try_for_each(|p| -> Result<()> {
+            let (core, reference) = rayon::join(
+                || {
+                    let t = Instant::now();
+                    let r = p.core.integrate(&frame.pose, &points);
+                    (r, t.elapsed().as_secs_f64())
+                },
+                || {
+                    let t = Instant::now();
+                    let r = p.reference.integrate(&frame.pose, &points);
+                    (r, t.elapsed().as_secs_f64())
+                },
+            );
+            core.0
+                .map_err(|e| anyhow::anyhow!("{}: core: {e:?}", frame.id))?;
+            reference
+                .0
+                .map_err(|e| anyhow::anyhow!("{}: reference: {e:?}", frame.id))?;
+            p.core_seconds += core.1;
+            p.reference_seconds += reference.1;
+            Ok(())
+        })?;
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+
+    let bar = crate::progress(count as u64, "back-project");
+    let indices: Vec<_> = pairs.iter().map(|p| p.reference.render_index()).collect();
+    for i in 0..count {
+        let frame = load(i)?;
+        let Some(gt) = frame.labels.as_ref() else {
+            continue;
+        };
+        let depth = frame.planar_depth_image();
+        pairs
+            .par_iter_mut()
+            .zip(indices.par_iter())
+            .try_for_each(|(p, index)| -> Result<()> {
+                let n = frame.pixels();
+                let (mut core_l, mut core_d) = (vec![0u8; n], vec![0f32; n]);
+                let (mut ref_l, mut ref_d) = (vec![0u8; n], vec![0f32; n]);
+                let (a, b) = rayon::join(
+                    || render_core(&p.core, &frame, &mut core_l, &mut core_d),
+                    || index.render(&frame.pose, &frame.rays, &mut ref_l, &mut ref_d),
+                );
+                a?;
+                b.map_err(|e| anyhow::anyhow!("{}: reference render: {e:?}", frame.id))?;
+                p.core_confusion.add_frame(gt, &core_l, &depth);
+                p.ref_confusion.add_frame(gt, &ref_l, &depth);
+                for ((&c, &r), &d) in core_l.iter().zip(&ref_l).zip(&depth) {
+                    if d < crate::eval::MAX_GT_DEPTH {
+                        p.pixels.add(c == r);
+                    }
+                }
+                p.evaluated = true;
+                Ok(())
+            })?;
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+
+    let cells = pairs.par_iter().map(compare_maps).collect();
+    Ok(Report {
+        source,
+        frames: count,
+        points: points_total,
+        options: *options,
+        miss_model: configs.first().map_or(MissModel::NdtOm, |c| c.miss_model),
+        cells,
+    })
+}
+
+/// The core's back-projection of `frame` (its pinhole, or per-pixel rays).
+fn render_core(map: &CompareMap, frame: &Frame, labels: &mut [u8], dist: &mut [f32]) -> Result<()> {
+    match frame.rays.as_ref() {
+        Rays::Pinhole(cam) => map
+            .render(&frame.pose, cam, labels, dist)
+            .map_err(|e| anyhow::anyhow!("{}: core render: {e:?}", frame.id)),
+        Rays::PerPixel { width, .. } => {
+            let rot = frame.pose.rotation.to_rotation_matrix();
+            let origin = sndt_core::Point3::from(frame.pose.translation.vector);
+            let w = *width as usize;
+            for (i, (l, d)) in labels.iter_mut().zip(dist.iter_mut()).enumerate() {
+                let r = frame.rays.ray((i % w) as u32, (i / w) as u32);
+                let dir = rot * sndt_core::Vector3::new(r[0], r[1], r[2]);
+                match map.raycast(&origin, &dir, map.config().max_range) {
+                    Some(hit) => (*l, *d) = (hit.class, hit.t),
+                    None => (*l, *d) = (INVALID_LABEL, 0.0),
+                }
+            }
+            Ok(())
+        }
+    }
+}
+
+fn to_key(k: &VoxelKey) -> Key {
+    [k.x as i32, k.y as i32, k.z as i32]
+}
+
+fn from_key(k: &Key) -> Option<VoxelKey> {
+    let c = |v: i32| i16::try_from(v).ok();
+    Some(VoxelKey {
+        x: c(k[0])?,
+        y: c(k[1])?,
+        z: c(k[2])?,
+    })
+}
+
+/// The voxel-by-voxel comparison of one pair of maps.
+fn compare_maps(p: &Pair) -> CellReport {
+    let (core, reference) = (&p.core, &p.reference);
+    let n_min = p.config.n_min;
+    let core_keys: HashSet<Key> = core.voxels().map(|v| to_key(&v.key)).collect();
+    let mut report = CellReport {
+        cell_size: p.config.cell_size,
+        only_core: core_keys
+            .iter()
+            .filter(|k| reference.voxel(k).is_none())
+            .count(),
+        only_ref: 0,
+        both: 0,
+        count_mismatch: 0,
+        mean_error_mm: Spread::default(),
+        covariance_error: Spread::default(),
+        occupancy: Agreement::default(),
+        surface_occupancy: Agreement::default(),
+        class: Agreement::default(),
+        core_class_ties: 0,
+        back_projection: None,
+        core_stats: core.stats(),
+        core_seconds: p.core_seconds,
+        reference_seconds: p.reference_seconds,
+    };
+    report.core_class_ties = core
+        .voxels()
+        .filter(|v| {
+            let max = v.histogram.iter().copied().max().unwrap_or(0);
+            max > 0 && v.histogram.iter().filter(|&&b| b == max).count() > 1
+        })
+        .count();
+    let mut mean_err = Vec::new();
+    let mut cov_err = Vec::new();
+    for (key, rv) in reference.voxels() {
+        let Some(cv) = from_key(key).and_then(|k| core.voxel(&k)) else {
+            report.only_ref += 1;
+            continue;
+        };
+        report.both += 1;
+        let g = reference.gaussian(key).expect("voxel exists");
+        if cv.gaussian.count as f64 != rv.n {
+            report.count_mismatch += 1;
+        }
+        let cm = cv.gaussian.mean.cast::<f64>();
+        mean_err.push((cm - g.mean).norm() * 1e3);
+        if cv.gaussian.count >= n_min && rv.n >= n_min as f64 {
+            let norm = g.covariance.norm();
+            if norm > 0.0 {
+                let cc = cv.gaussian.covariance.cast::<f64>();
+                cov_err.push((cc - g.covariance).norm() / norm);
+            }
+        }
+        report
+            .surface_occupancy
+            .add(cv.occupancy() == reference.occupancy(key));
+        let (cc, rc) = (cv.class(), rv.class());
+        if cc.is_some() || rc.is_some() {
+            report.class.add(cc.map(|c| c.0) == rc.map(|c| c.0));
+        }
+    }
+    report.mean_error_mm = Spread::of(mean_err);
+    report.covariance_error = Spread::of(cov_err);
+
+    let mut observed: HashSet<Key> = core.cells().map(|(k, _)| to_key(&k)).collect();
+    observed.extend(reference.cells().map(|(k, _)| *k));
+    for key in &observed {
+        let c = from_key(key).map_or(Occupancy::Unknown, |k| core.occupancy(&k));
+        report.occupancy.add(c == reference.occupancy(key));
+    }
+    if p.evaluated {
+        report.back_projection = Some(BackProjection {
+            core: p.core_confusion.metrics(),
+            reference: p.ref_confusion.metrics(),
+            pixels: p.pixels,
+        });
+    }
+    report
+}
+
+/// Arguments of `sndt compare`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct CompareArgs {
+    /// Dataset directory (any layout `dataset::open` reads), or `synthetic` for the default
+    /// synthetic split rendered on the fly (no files).
+    pub dataset: String,
+    /// Cell sizes in metres, comma separated.
+    #[arg(long, value_delimiter = ',', default_value = "0.1")]
+    pub cell: Vec<f32>,
+    /// Frames of the trajectory: `N` (the first N) or a range `A..B` (default: all).
+    #[arg(long)]
+    pub frames: Option<String>,
+    /// Labels attached to the points.
+    #[arg(long, value_enum, default_value_t = LabelSource::Gt)]
+    pub labels: LabelSource,
+    /// Integrate every stride-th pixel in both directions (rendering uses all pixels).
+    #[arg(long, default_value_t = 1)]
+    pub stride: u32,
+    /// Split of the prepared layout.
+    #[arg(long)]
+    pub split: Option<String>,
+    /// Trajectory `scene/cam` (default: the first).
+    #[arg(long)]
+    pub trajectory: Option<String>,
+    /// Use constant misses instead of NDT-OM misses.
+    #[arg(long)]
+    pub constant_miss: bool,
+}
+
+/// Parses `--frames`: `N` = `0..N`, `A..B`, or `A..` (to the end), within `0..len`.
+///
+/// ```
+/// use sndt_host::compare::frame_range;
+/// assert_eq!(frame_range(Some("20"), 100).unwrap(), 0..20);
+/// assert_eq!(frame_range(Some("10..30"), 100).unwrap(), 10..30);
+/// assert_eq!(frame_range(Some("90.."), 100).unwrap(), 90..100);
+/// assert_eq!(frame_range(None, 100).unwrap(), 0..100);
+/// assert!(frame_range(Some("30..10"), 100).is_err());
+/// assert!(frame_range(Some("200"), 100).is_err());
+/// ```
+pub fn frame_range(spec: Option<&str>, len: usize) -> Result<std::ops::Range<usize>> {
+    let parse = |s: &str| -> Result<usize> {
+        s.trim()
+            .parse()
+            .with_context(|| format!("--frames: {s:?} is not a frame number"))
+    };
+    let range = match spec {
+        None => 0..len,
+        Some(s) => match s.split_once("..") {
+            None => 0..parse(s)?,
+            Some((a, b)) if b.trim().is_empty() => parse(a)?..len,
+            Some((a, b)) => parse(a)?..parse(b)?,
+        },
+    };
+    if range.start >= range.end || range.end > len {
+        bail!(
+            "--frames {}: need a non-empty range within the trajectory's {len} frames",
+            spec.unwrap_or("")
+        );
+    }
+    Ok(range)
+}
+
+/// Runs `sndt compare`.
+pub fn command(args: &CompareArgs) -> Result<Report> {
+    let data: Box<dyn Dataset> = if args.dataset == "synthetic" {
+        use crate::synth::{SynthOptions, Synthetic};
+        let predictions = matches!(args.labels, LabelSource::Pred | LabelSource::PredTopk);
+        Box::new(Synthetic::new(SynthOptions {
+            scenes: 1,
+            predictions,
+            ..SynthOptions::default()
+        })?)
+    } else {
+        let options = dataset::OpenOptions {
+            split: args.split.clone(),
+            ..Default::default()
+        };
+        dataset::open(Path::new(&args.dataset), &options)?
+    };
+    let trajectories = data.trajectories();
+    let (name, ids) = match &args.trajectory {
+        None => trajectories.first(),
+        Some(t) => trajectories.iter().find(|(name, _)| name == t),
+    }
+    .with_context(|| {
+        format!(
+            "{}: no trajectory {}",
+            args.dataset,
+            args.trajectory.as_deref().unwrap_or("")
+        )
+    })?;
+    let range = frame_range(args.frames.as_deref(), ids.len())?;
+    let ids = &ids[range.clone()];
+    if args.cell.is_empty() {
+        bail!("--cell: no cell size");
+    }
+    let configs: Vec<Config> = args
+        .cell
+        .iter()
+        .map(|&c| {
+            let mut config = Config::with_cell_size(c);
+            if args.constant_miss {
+                config.miss_model = MissModel::Constant;
+            }
+            config
+                .validate()
+                .map_err(|_| anyhow::anyhow!("--cell {c}: not a valid cell size"))?;
+            Ok(config)
+        })
+        .collect::<Result<_>>()?;
+    let source = format!(
+        "{}, trajectory {name}, frames {}..{}",
+        data.describe(),
+        range.start,
+        range.end
+    );
+    let options = Options {
+        labels: args.labels,
+        stride: args.stride.max(1),
+    };
+    compare_cells(source, ids.len(), &configs, &options, |i| {
+        Ok(Cow::Owned(data.load(&ids[i])?))
+    })
+}
+
+impl fmt::Display for Report {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "sndt compare: {}", self.source)?;
+        writeln!(
+            f,
+            "{} frames, {} points per map (labels {:?}, stride {}), misses {:?}; core Map<{}, {}, {}> vs f64 reference",
+            self.frames,
+            self.points,
+            self.options.labels,
+            self.options.stride,
+            self.miss_model,
+            1 << 19,
+            1 << 17,
+            CLASSES
+        )?;
+        writeln!(f)?;
+        let cells = &self.cells;
+        let row = |f: &mut fmt::Formatter<'_>,
+                   what: &str,
+                   cell: &dyn Fn(&CellReport) -> String|
+         -> fmt::Result {
+            write!(f, "| {what} |")?;
+            for c in cells {
+                write!(f, " {} |", cell(c))?;
+            }
+            writeln!(f)
+        };
+        write!(f, "| cell |")?;
+        for c in cells {
+            write!(f, " {:.0} cm |", c.cell_size * 100.0)?;
+        }
+        writeln!(f)?;
+        write!(f, "|---|")?;
+        for _ in cells {
+            write!(f, "---:|")?;
+        }
+        writeln!(f)?;
+        let pct = |a: &Agreement| format!("{:.3} % of {}", a.fraction() * 100.0, a.total);
+        row(f, "surface voxels in both", &|c| c.both.to_string())?;
+        row(f, "only core / only reference", &|c| {
+            format!("{} / {}", c.only_core, c.only_ref)
+        })?;
+        row(f, "point counts differing", &|c| {
+            c.count_mismatch.to_string()
+        })?;
+        row(f, "mean error: mean / p99 / max (mm)", &|c| {
+            let e = &c.mean_error_mm;
+            format!("{:.3} / {:.3} / {:.3}", e.mean, e.p99, e.max)
+        })?;
+        row(f, "covariance rel. error: median / p99 (%)", &|c| {
+            let e = &c.covariance_error;
+            format!("{:.3} / {:.2}", e.median * 100.0, e.p99 * 100.0)
+        })?;
+        row(f, "occupancy agreement, observed voxels", &|c| {
+            pct(&c.occupancy)
+        })?;
+        row(f, "occupancy agreement, surface voxels", &|c| {
+            pct(&c.surface_occupancy)
+        })?;
+        row(f, "class agreement", &|c| pct(&c.class))?;
+        row(f, "core voxels with a tied class argmax", &|c| {
+            c.core_class_ties.to_string()
+        })?;
+        let bp = |c: &CellReport, m: &dyn Fn(&Metrics) -> f64| match &c.back_projection {
+            Some(b) => {
+                let (a, r) = (m(&b.core) * 100.0, m(&b.reference) * 100.0);
+                format!("{a:.2} / {r:.2} ({:+.3})", a - r)
+            }
+            None => "-".into(),
+        };
+        row(f, "mIoU core / ref (diff), %", &|c| bp(c, &|m| m.miou))?;
+        row(f, "invR core / ref (diff), %", &|c| bp(c, &|m| m.invr))?;
+        row(f, "mPAcc core / ref (diff), %", &|c| bp(c, &|m| m.mpacc))?;
+        row(f, "rendered labels equal", &|c| match &c.back_projection {
+            Some(b) => pct(&b.pixels),
+            None => "-".into(),
+        })?;
+        row(f, "core evicted voxels / blocks / dropped", &|c| {
+            let s = &c.core_stats;
+            format!(
+                "{} / {} / {}",
+                s.voxels_evicted,
+                s.blocks_evicted,
+                s.dropped_points + s.dropped_misses
+            )
+        })?;
+        row(f, "integration core / ref (s)", &|c| {
+            format!("{:.2} / {:.2}", c.core_seconds, c.reference_seconds)
+        })?;
+        for c in cells {
+            let v = c.violations(&TOLERANCES);
+            if !v.is_empty() {
+                writeln!(f)?;
+                writeln!(
+                    f,
+                    "{:.0} cm misses the issue's tolerances (asserted at 10 cm): {}",
+                    c.cell_size * 100.0,
+                    v.join("; ")
+                )?;
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,850 @@
+//! The f64 reference S-NDT: the yardstick for the core's integer statistics.
+//!
+//! [`RefMap`] implements the map of DESIGN.md section 2 in plain `f64` maths with std
+//! collections: no quantisation, no fixed-point log-odds, no capacity limit. It is written
+//! from the design, not by calling `sndt_core`'s update code; it shares only [`Config`]
+//! (so both sides use the same parameters) and the voxel-key convention (a world point `p`
+//! in `f32`, computed from the sensor point as the core does, lies in voxel
+//! `floor(p * (1 / h))`, see [`sndt_core::VoxelKey::from_point`]), so that both maps assign
+//! every point to the same voxel and differences measure the core's arithmetic only.
+//!
+//! A frame runs in the same three phases as the core:
+//!
+//! 1. **points**: each valid point is transformed to the world (in `f32`, the key
+//!    convention) and added to its voxel's `f64` sums `n`, `S1 = sum (p - c)`,
+//!    `S2 = sum (p - c)(p - c)^T` about the voxel centre `c`; its top-k labels are counted
+//!    as this frame's votes. Points beyond `max_range` only mark the voxel of the point
+//!    where their ray is truncated;
+//! 2. **hits**: every voxel that received points gets one hit (`+hit`, clamped), its class
+//!    histogram makes room once (all bins halved, exactly, when one exceeds 127) and takes
+//!    the frame's votes saturating at 255 (README "Design decisions"), and its count and
+//!    sums are scaled down to the point cap (`n` halved, rounding up, until `n <= n_max`;
+//!    sums scaled by the same factor);
+//! 3. **free space**: one ray per unique end voxel, aimed at the mean of the voxel's points
+//!    (kept 1 % of a cell inside the voxel), end voxel excluded, and one per unique
+//!    truncated end (aimed at its centre, end included), in the core's order (by 4x4x4
+//!    block, then end voxels before truncated ends, then by cell in the block). A traversed
+//!    voxel gets at most one miss per frame: the NDT-OM miss of DESIGN.md with the voxel's
+//!    *current* Gaussian (after phases 1 and 2) where it has one (`n >= n_min`), or the
+//!    constant miss otherwise. A NDT-OM miss whose closest point lies beyond the ray's end
+//!    is skipped and leaves the voxel free for a later ray of the frame.
+//!
+//! Rendering ([`RenderIndex`]) follows the core's ray casting: an exact DDA walk whose
+//! every voxel's 3x3x3 neighbourhood is searched for occupied voxels with a valid Gaussian;
+//! the hit is the smallest entry distance into an ellipsoid of Mahalanobis radius
+//! `render_radius`.
+//!
+//! ```
+//! use sndt_host::reference::RefMap;
+//! use sndt_core::{Config, Isometry3, LabeledPoint, Labels, Occupancy, Point3};
+//! let mut map = RefMap::new(Config::DEFAULT, 40);
+//! let points = [
+//!     LabeledPoint::new(Point3::new(0.02, 0.03, 1.02), Labels::top1(5)),
+//!     LabeledPoint::new(Point3::new(0.07, 0.03, 1.05), Labels::top1(5)),
+//!     LabeledPoint::new(Point3::new(0.03, 0.08, 1.04), Labels::top1(5)),
+//! ];
+//! map.integrate(&Isometry3::identity(), &points).unwrap();
+//! let key = [0, 0, 10];
+//! assert_eq!(map.occupancy(&key), Occupancy::Occupied);
+//! assert_eq!(map.occupancy(&[0, 0, 5]), Occupancy::Free);
+//! assert_eq!(map.class(&key), Some((5, 1.0)));
+//! let g = map.gaussian(&key).unwrap();
+//! assert!((g.mean.x - 0.04).abs() < 1e-7 && g.count == 3.0);
+//! ```
+
+use crate::dataset::Rays;
+use nalgebra::{Matrix3, Vector3};
+use rayon::prelude::*;
+use sndt_core::{
+    Config, Error, Isometry3, LabeledPoint, MissModel, Occupancy, INVALID_LABEL, KEY_LIMIT,
+    MAX_TOP_K,
+};
+use std::collections::{HashMap, HashSet};
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// A voxel index `[x, y, z]`: the voxel covers `[k h, (k + 1) h)` on each axis (the same
+/// convention as [`sndt_core::VoxelKey`]).
+pub type Key = [i32; 3];
+
+/// Hasher for [`Key`]s: a multiply-rotate fold with a 64-bit finaliser (std's SipHash is
+/// needlessly slow for the millions of lookups of a render).
+#[derive(Clone, Copy, Default)]
+struct KeyHasher(u64);
+
+impl Hasher for KeyHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(4) {
+            let mut w = [0u8; 4];
+            w[..chunk.len()].copy_from_slice(chunk);
+            self.0 = (self.0.rotate_left(21) ^ u32::from_le_bytes(w) as u64)
+                .wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        }
+    }
+
+    fn write_usize(&mut self, _: usize) {
+        // Only the (constant) length prefix of a key array arrives here.
+    }
+
+    fn finish(&self) -> u64 {
+        let mut x = self.0;
+        x ^= x >> 30;
+        x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        x ^= x >> 27;
+        x = x.wrapping_mul(0x94D0_49BB_1331_11EB);
+        x ^ (x >> 31)
+    }
+}
+
+type KeyMap<V> = HashMap<Key, V, BuildHasherDefault<KeyHasher>>;
+type KeySet = HashSet<Key, BuildHasherDefault<KeyHasher>>;
+
+/// One surface voxel of the reference: exact `f64` point statistics and class votes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RefVoxel {
+    /// Number of points (after the point cap).
+    pub n: f64,
+    /// `S1`: sum of the points' offsets from the voxel centre, metres.
+    pub s1: Vector3<f64>,
+    /// `S2`: sum of the outer products of those offsets, square metres.
+    pub s2: Matrix3<f64>,
+    /// Class votes; bin `i` is class `i + 1`. Real-valued: halving is exact.
+    pub hist: Vec<f64>,
+}
+
+impl RefVoxel {
+    fn new(classes: usize) -> RefVoxel {
+        RefVoxel {
+            n: 0.0,
+            s1: Vector3::zeros(),
+            s2: Matrix3::zeros(),
+            hist: vec![0.0; classes],
+        }
+    }
+
+    /// The most voted class (1-based) and its share of the votes; ties go to the lowest
+    /// class, as in the core. `None` without votes.
+    ///
+    /// ```
+    /// # use sndt_host::reference::RefVoxel;
+    /// # use nalgebra::{Matrix3, Vector3};
+    /// let v = RefVoxel { n: 1.0, s1: Vector3::zeros(), s2: Matrix3::zeros(), hist: vec![1.0, 3.0, 3.0, 1.0] };
+    /// assert_eq!(v.class(), Some((2, 0.375)));
+    /// ```
+    pub fn class(&self) -> Option<(u8, f64)> {
+        let mut best = 0;
+        let mut total = 0.0;
+        for (i, &b) in self.hist.iter().enumerate() {
+            total += b;
+            if b > self.hist[best] {
+                best = i;
+            }
+        }
+        (total > 0.0).then(|| (best as u8 + 1, self.hist[best] / total))
+    }
+
+    /// Sample covariance `(S2 - S1 S1^T / n) / (n - 1)` in square metres (zero for `n < 2`).
+    pub fn covariance(&self) -> Matrix3<f64> {
+        if self.n < 2.0 {
+            return Matrix3::zeros();
+        }
+        (self.s2 - self.s1 * self.s1.transpose() / self.n) / (self.n - 1.0)
+    }
+
+    /// Scales the count down to the point cap: `n` is halved (rounding up) until
+    /// `n <= n_max` and the sums are multiplied by the same factor, which keeps the mean.
+    fn decay(&mut self, n_max: u32) {
+        let n = self.n as u64;
+        if n <= n_max as u64 {
+            return;
+        }
+        let mut m = n;
+        while m > n_max as u64 {
+            m = m.div_ceil(2);
+        }
+        let f = m as f64 / n as f64;
+        self.s1 *= f;
+        self.s2 *= f;
+        self.n = m as f64;
+    }
+}
+
+/// A voxel's normal distribution in world coordinates (metres).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RefGaussian {
+    /// Mean, metres.
+    pub mean: Vector3<f64>,
+    /// Sample covariance, square metres (zero for fewer than 2 points).
+    pub covariance: Matrix3<f64>,
+    /// Number of points (after the point cap).
+    pub count: f64,
+}
+
+impl RefGaussian {
+    /// The inverse covariance with every eigenvalue raised to
+    /// `max(ratio * lambda_max, floor_abs)` (DESIGN.md: eigenvalues below
+    /// `lambda_max / 1000` are raised before inversion; `floor_abs = (h / 1000)^2` covers
+    /// voxels whose points coincide).
+    ///
+    /// ```
+    /// # use sndt_host::reference::RefGaussian;
+    /// # use nalgebra::{Matrix3, Vector3};
+    /// let g = RefGaussian { mean: Vector3::zeros(), count: 9.0,
+    ///     covariance: Matrix3::from_diagonal(&Vector3::new(4.0, 1e-9, 1.0)) };
+    /// let inv = g.inverse(1e-3, 0.0);
+    /// assert!((inv[(0, 0)] - 0.25).abs() < 1e-12 && (inv[(1, 1)] - 250.0).abs() < 1e-9);
+    /// ```
+    pub fn inverse(&self, ratio: f64, floor_abs: f64) -> Matrix3<f64> {
+        let e = self.covariance.symmetric_eigen();
+        let lmax = e.eigenvalues.max();
+        let floor = (lmax * ratio).max(floor_abs);
+        let mut inv = Matrix3::zeros();
+        for i in 0..3 {
+            let v = e.eigenvectors.column(i);
+            inv += v * v.transpose() / e.eigenvalues[i].max(floor);
+        }
+        inv
+    }
+}
+
+/// What one reference frame did (a subset of the core's `FrameReport`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RefFrameReport {
+    /// Points folded into voxel statistics.
+    pub points_used: u32,
+    /// Points beyond max range (free space only).
+    pub truncated: u32,
+    /// Points rejected: bad coordinates, bad labels, or outside the key range.
+    pub rejected: u32,
+    /// Unique end voxels (= hits).
+    pub end_voxels: u32,
+    /// Rays cast (end voxels + unique truncated ends).
+    pub rays: u32,
+    /// Misses applied.
+    pub misses: u32,
+}
+
+/// A free-space ray in world metres.
+#[derive(Clone, Copy, Debug)]
+struct Ray {
+    origin: Vector3<f64>,
+    /// Unit direction.
+    dir: Vector3<f64>,
+    /// Length to the ray's end `z`.
+    len: f64,
+    /// The end is a measurement (false for a ray truncated at max range: `pz = 0`).
+    measured: bool,
+}
+
+/// The f64 reference map. See the [module documentation](self).
+#[derive(Clone, Debug)]
+pub struct RefMap {
+    config: Config,
+    classes: usize,
+    h: f64,
+    voxels: KeyMap<RefVoxel>,
+    cells: KeyMap<f64>,
+    frames: u64,
+}
+
+impl RefMap {
+    /// An empty map with `config` (the core's parameters; `cell_size` etc. are used as
+    /// their exact `f64` values) and `classes` semantic classes (ids `1..=classes`).
+    pub fn new(config: Config, classes: usize) -> RefMap {
+        RefMap {
+            config,
+            classes,
+            h: config.cell_size as f64,
+            voxels: KeyMap::default(),
+            cells: KeyMap::default(),
+            frames: 0,
+        }
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// Frames integrated.
+    pub fn frames(&self) -> u64 {
+        self.frames
+    }
+
+    /// Number of surface voxels.
+    pub fn len(&self) -> usize {
+        self.voxels.len()
+    }
+
+    /// True before the first point.
+    pub fn is_empty(&self) -> bool {
+        self.voxels.is_empty() && self.cells.is_empty()
+    }
+
+    /// The key of the voxel holding world point `p` (`f32`, the shared convention:
+    /// `floor(p * (1 / h))` in `f32`), or `None` outside the key range.
+    ///
+    /// ```
+    /// let map = sndt_host::reference::RefMap::new(sndt_core::Config::DEFAULT, 40);
+    /// assert_eq!(map.key(&[0.25, -0.05, 1.0]), Some([2, -1, 10]));
+    /// assert_eq!(map.key(&[1e9, 0.0, 0.0]), None);
+    /// ```
+    pub fn key(&self, p: &[f32; 3]) -> Option<Key> {
+        let inv = 1.0 / self.config.cell_size;
+        let mut k = [0; 3];
+        for (k, &x) in k.iter_mut().zip(p) {
+            let s = x * inv;
+            if !(s >= -(KEY_LIMIT as f32) && s < (KEY_LIMIT + 1) as f32) {
+                return None;
+            }
+            *k = s.floor() as i32;
+        }
+        Some(k)
+    }
+
+    /// Centre of voxel `key` in metres.
+    pub fn centre(&self, key: &Key) -> Vector3<f64> {
+        Vector3::new(
+            (key[0] as f64 + 0.5) * self.h,
+            (key[1] as f64 + 0.5) * self.h,
+            (key[2] as f64 + 0.5) * self.h,
+        )
+    }
+
+    /// The surface voxel `key`, if it has points.
+    pub fn voxel(&self, key: &Key) -> Option<&RefVoxel> {
+        self.voxels.get(key)
+    }
+
+    /// All surface voxels (unordered).
+    pub fn voxels(&self) -> impl Iterator<Item = (&Key, &RefVoxel)> + '_ {
+        self.voxels.iter()
+    }
+
+    /// Every voxel a hit or miss reached, with its log-odds (unordered; exactly 0 means
+    /// unknown).
+    pub fn cells(&self) -> impl Iterator<Item = (&Key, f64)> + '_ {
+        self.cells.iter().map(|(k, &l)| (k, l))
+    }
+
+    /// Occupancy log-odds (natural units); 0 when never observed.
+    pub fn log_odds(&self, key: &Key) -> f64 {
+        self.cells.get(key).copied().unwrap_or(0.0)
+    }
+
+    /// Occupancy state: occupied above 0, free below, unknown at exactly 0 (as the core).
+    pub fn occupancy(&self, key: &Key) -> Occupancy {
+        let l = self.log_odds(key);
+        if l > 0.0 {
+            Occupancy::Occupied
+        } else if l < 0.0 {
+            Occupancy::Free
+        } else {
+            Occupancy::Unknown
+        }
+    }
+
+    /// Most voted class (1-based) and its share, for a surface voxel with votes.
+    pub fn class(&self, key: &Key) -> Option<(u8, f64)> {
+        self.voxels.get(key)?.class()
+    }
+
+    /// Mean, covariance and count of a surface voxel.
+    pub fn gaussian(&self, key: &Key) -> Option<RefGaussian> {
+        let v = self.voxels.get(key)?;
+        Some(RefGaussian {
+            mean: self.centre(key) + v.s1 / v.n,
+            covariance: v.covariance(),
+            count: v.n,
+        })
+    }
+
+    /// Mean and inverse covariance (eigenvalue floor applied) of a voxel whose Gaussian
+    /// is valid (`n >= n_min`).
+    fn prepared(&self, key: &Key) -> Option<(Vector3<f64>, Matrix3<f64>)> {
+        let v = self.voxels.get(key)?;
+        if v.n < self.config.n_min as f64 {
+            return None;
+        }
+        let g = self.gaussian(key)?;
+        let floor_abs = (self.h * 1e-3) * (self.h * 1e-3);
+        Some((g.mean, g.inverse(self.config.eigen_ratio as f64, floor_abs)))
+    }
+
+    /// Integrates one frame of labelled points in the sensor frame at `pose` (sensor to
+    /// world), in the three phases of the [module documentation](self). A non-finite or
+    /// non-unit pose is [`Error::InvalidPose`], a sensor outside the key range
+    /// [`Error::PoseOutOfRange`]; the map is then unchanged.
+    pub fn integrate(
+        &mut self,
+        pose: &Isometry3<f32>,
+        points: &[LabeledPoint],
+    ) -> Result<RefFrameReport, Error> {
+        let t = pose.translation.vector;
+        let q = pose.rotation.quaternion();
+        if !t.iter().chain(q.coords.iter()).all(|x| x.is_finite())
+            || (q.norm_squared() - 1.0).abs() > 1e-3
+        {
+            return Err(Error::InvalidPose);
+        }
+        let origin32 = [t.x, t.y, t.z];
+        let origin_key = self.key(&origin32).ok_or(Error::PoseOutOfRange)?;
+        let m = *pose.rotation.to_rotation_matrix().matrix();
+        let cfg = self.config;
+        let classes = self.classes;
+        let mut report = RefFrameReport::default();
+
+        // Phase 1: points into sums, votes per end voxel, truncated ends.
+        let mut votes: KeyMap<Vec<u32>> = KeyMap::default();
+        let mut far = KeySet::default();
+        for p in points {
+            let s = [p.position.x, p.position.y, p.position.z];
+            let r2 = s[0] * s[0] + s[1] * s[1] + s[2] * s[2];
+            let nl = p.labels.len as usize;
+            if !(r2.is_finite() && r2 > 0.0)
+                || nl > MAX_TOP_K
+                || p.labels.classes[..nl].iter().any(|&c| c as usize > classes)
+            {
+                report.rejected += 1;
+                continue;
+            }
+            // The world point in f32 exactly as the core computes it (shared key convention).
+            let mut w = [0.0f32; 3];
+            for (i, wi) in w.iter_mut().enumerate() {
+                *wi = m[(i, 0)] * s[0] + m[(i, 1)] * s[1] + m[(i, 2)] * s[2] + origin32[i];
+            }
+            if r2 > cfg.max_range * cfg.max_range {
+                let scale = cfg.max_range / r2.sqrt();
+                let e = [0, 1, 2].map(|i| origin32[i] + (w[i] - origin32[i]) * scale);
+                match self.key(&e) {
+                    Some(k) => {
+                        far.insert(k);
+                        report.truncated += 1;
+                    }
+                    None => report.rejected += 1,
+                }
+                continue;
+            }
+            let Some(key) = self.key(&w) else {
+                report.rejected += 1;
+                continue;
+            };
+            let d = Vector3::new(w[0] as f64, w[1] as f64, w[2] as f64) - self.centre(&key);
+            let v = self
+                .voxels
+                .entry(key)
+                .or_insert_with(|| RefVoxel::new(classes));
+            v.n += 1.0;
+            v.s1 += d;
+            v.s2 += d * d.transpose();
+            let frame_votes = votes.entry(key).or_insert_with(|| vec![0; classes]);
+            for i in 0..(cfg.top_k as usize).min(nl) {
+                let c = p.labels.classes[i] as usize;
+                if c >= 1 && p.labels.scores[i] >= cfg.min_score {
+                    frame_votes[c - 1] += 1;
+                }
+            }
+            report.points_used += 1;
+        }
+
+        // Phase 2: histogram room + votes, point cap, one hit per end voxel.
+        let (lo, hi) = (cfg.clamp_min as f64, cfg.clamp_max as f64);
+        for (key, frame_votes) in &votes {
+            let v = self
+                .voxels
+                .get_mut(key)
+                .expect("end voxels have statistics");
+            if v.hist.iter().any(|&b| b > 127.0) {
+                v.hist.iter_mut().for_each(|b| *b *= 0.5);
+            }
+            for (b, &n) in v.hist.iter_mut().zip(frame_votes) {
+                *b = (*b + n as f64).min(255.0);
+            }
+            v.decay(cfg.n_max);
+            let l = self.cells.entry(*key).or_insert(0.0);
+            *l = (*l + cfg.hit as f64).clamp(lo, hi);
+            report.end_voxels += 1;
+        }
+
+        // Phase 3: rays in the core's order, at most one miss per voxel.
+        let mut ends: Vec<(Key, bool)> = votes.keys().map(|k| (*k, false)).collect();
+        ends.extend(
+            far.iter()
+                .filter(|k| !votes.contains_key(*k))
+                .map(|k| (*k, true)),
+        );
+        ends.sort_unstable_by_key(|&(k, truncated)| ray_order(&k, truncated));
+        let origin = Vector3::new(t.x as f64, t.y as f64, t.z as f64);
+        let mut missed = KeySet::default();
+        let mut prepared: KeyMap<Option<(Vector3<f64>, Matrix3<f64>)>> = KeyMap::default();
+        let mut path = Vec::new();
+        for (end, truncated) in ends {
+            // Target in voxel units: the mean of the end voxel's points, 1 % inside the
+            // voxel, or the centre of a truncated end.
+            let target = if truncated {
+                [0, 1, 2].map(|i| end[i] as f64 + 0.5)
+            } else {
+                let v = &self.voxels[&end];
+                [0, 1, 2].map(|i| {
+                    let off = 0.5 + v.s1[i] / v.n / self.h;
+                    end[i] as f64 + off.clamp(0.01, 0.99)
+                })
+            };
+            let target_w = Vector3::new(target[0], target[1], target[2]) * self.h;
+            let d = target_w - origin;
+            let len = d.norm();
+            let ray = Ray {
+                origin,
+                dir: if len > 0.0 { d / len } else { Vector3::z() },
+                len,
+                measured: !truncated,
+            };
+            report.rays += 1;
+            path.clear();
+            let o = [0, 1, 2].map(|i| origin[i] / self.h);
+            walk_segment(o, target, origin_key, end, truncated, &mut path);
+            for key in &path {
+                if missed.contains(key) {
+                    continue;
+                }
+                let mut delta = cfg.miss as f64;
+                if cfg.miss_model == MissModel::NdtOm {
+                    let g = *prepared.entry(*key).or_insert_with(|| self.prepared(key));
+                    if let Some((mean, inv)) = g {
+                        match ndt_om_miss(&cfg, &ray, &mean, &inv) {
+                            Some(l) => delta = l,
+                            None => continue,
+                        }
+                    }
+                }
+                missed.insert(*key);
+                let l = self.cells.entry(*key).or_insert(0.0);
+                *l = (*l + delta).clamp(lo, hi);
+                report.misses += 1;
+            }
+        }
+        self.frames += 1;
+        Ok(report)
+    }
+
+    /// The occupied voxels with a valid Gaussian, prepared for ray casting.
+    pub fn render_index(&self) -> RenderIndex {
+        let entries = self
+            .voxels
+            .iter()
+            .filter(|(k, _)| self.log_odds(k) > 0.0)
+            .filter_map(|(k, v)| {
+                let (mean, inv) = self.prepared(k)?;
+                let class = v.class().map_or(0, |c| c.0);
+                Some((*k, Renderable { mean, inv, class }))
+            })
+            .collect();
+        RenderIndex {
+            h: self.h,
+            radius: self.config.render_radius as f64,
+            max_range: self.config.max_range as f64,
+            entries,
+        }
+    }
+
+    /// The first occupied Gaussian the ray enters (see [`RenderIndex::raycast`]); builds
+    /// a [`RenderIndex`] per call, so prefer [`RefMap::render_index`] for many rays.
+    pub fn raycast(&self, origin: &[f64; 3], dir: &[f64; 3], max_t: f64) -> Option<RefHit> {
+        self.render_index().raycast(origin, dir, max_t)
+    }
+}
+
+/// The core's ray order inside a frame: by 4x4x4 block (lexicographic block key), then end
+/// voxels before truncated ends, then by cell index in the block (x fastest).
+fn ray_order(k: &Key, truncated: bool) -> (i32, i32, i32, bool, i32) {
+    let cell = (k[0] & 3) | ((k[1] & 3) << 2) | ((k[2] & 3) << 4);
+    (k[0] >> 2, k[1] >> 2, k[2] >> 2, truncated, cell)
+}
+
+/// Exact voxel traversal (Amanatides & Woo) of the segment from `o` to `target` (voxel
+/// units), from voxel `start` to voxel `end`, pushing every voxel visited; `end` only when
+/// `include_end`. Where the segment crosses several boundaries at once, the lowest axis
+/// steps first. Stops after the Manhattan distance of the keys (or if it would leave the
+/// segment), so it always ends.
+fn walk_segment(
+    o: [f64; 3],
+    target: [f64; 3],
+    start: Key,
+    end: Key,
+    include_end: bool,
+    out: &mut Vec<Key>,
+) {
+    let d = [0, 1, 2].map(|i| target[i] - o[i]);
+    let mut k = start;
+    let mut step = [0; 3];
+    let mut t_next = [f64::INFINITY; 3];
+    let mut t_delta = [f64::INFINITY; 3];
+    for a in 0..3 {
+        if d[a] > 0.0 {
+            step[a] = 1;
+            t_next[a] = (k[a] as f64 + 1.0 - o[a]) / d[a];
+            t_delta[a] = 1.0 / d[a];
+        } else if d[a] < 0.0 {
+            step[a] = -1;
+            t_next[a] = (k[a] as f64 - o[a]) / d[a];
+            t_delta[a] = -1.0 / d[a];
+        }
+    }
+    let steps: u32 = (0..3).map(|a| (end[a] - start[a]).unsigned_abs()).sum();
+    for _ in 0..=steps {
+        if k == end {
+            if include_end {
+                out.push(end);
+            }
+            return;
+        }
+        out.push(k);
+        let mut a = 0;
+        for b in 1..3 {
+            if t_next[b] < t_next[a] {
+                a = b;
+            }
+        }
+        if t_next[a] > 1.0 + 1e-9 {
+            return;
+        }
+        k[a] += step[a];
+        t_next[a] += t_delta[a];
+    }
+}
+
+/// NDT-OM miss log-odds (DESIGN.md section 2) for `ray` through a Gaussian with mean `mu`
+/// and inverse covariance `inv`, or `None` when the ray's closest point to the Gaussian
+/// lies beyond its end:
+/// `t* = u^T S^-1 (mu - s) / (u^T S^-1 u)`, `x = s + t* u`,
+/// `pN = exp(-(x - mu)^T S^-1 (x - mu) / 2)`, `pz = exp(-|x - z|^2 / (2 sigma^2))` with
+/// `sigma = noise_base + noise_quadratic r^2` at the ray's length `r` (0 for a truncated
+/// ray), `p = 0.5 - lambda pN (1 - pz)`, miss = `logit(p)`.
+fn ndt_om_miss(cfg: &Config, ray: &Ray, mu: &Vector3<f64>, inv: &Matrix3<f64>) -> Option<f64> {
+    let u = ray.dir;
+    let w = inv * u;
+    let a = u.dot(&w);
+    if a.is_nan() || a <= 0.0 {
+        return Some(cfg.miss as f64);
+    }
+    let t = w.dot(&(mu - ray.origin)) / a;
+    if t > ray.len {
+        return None;
+    }
+    let dx = ray.origin + u * t - mu;
+    let p_n = (-0.5 * dx.dot(&(inv * dx))).exp();
+    let p_z = if ray.measured {
+        let sigma = cfg.noise_base as f64 + cfg.noise_quadratic as f64 * ray.len * ray.len;
+        let dz = ray.len - t;
+        (-0.5 * dz * dz / (sigma * sigma)).exp()
+    } else {
+        0.0
+    };
+    let p = 0.5 - cfg.lambda as f64 * p_n * (1.0 - p_z);
+    Some((p / (1.0 - p)).ln())
+}
+
+/// Where a ray first enters an occupied Gaussian of the reference.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RefHit {
+    /// Distance from the ray origin, metres.
+    pub t: f64,
+    /// The voxel's class (1-based), 0 without votes (void).
+    pub class: u8,
+    /// The voxel hit.
+    pub key: Key,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Renderable {
+    mean: Vector3<f64>,
+    inv: Matrix3<f64>,
+    class: u8,
+}
+
+/// The renderable voxels of a [`RefMap`] (occupied, `n >= n_min`) with their prepared
+/// Gaussians: ray casting and rendering in `f64`.
+///
+/// ```
+/// use sndt_host::reference::RefMap;
+/// use sndt_core::{Config, Isometry3, LabeledPoint, Labels, Point3};
+/// let mut map = RefMap::new(Config::DEFAULT, 40);
+/// let pts: Vec<_> = (0..100)
+///     .map(|i| LabeledPoint::new(
+///         Point3::new((i % 10) as f32 * 0.01, (i / 10) as f32 * 0.01, 1.05), Labels::top1(3)))
+///     .collect();
+/// map.integrate(&Isometry3::identity(), &pts).unwrap();
+/// let index = map.render_index();
+/// let hit = index.raycast(&[0.05, 0.05, 0.0], &[0.0, 0.0, 1.0], 3.0).unwrap();
+/// assert_eq!((hit.class, hit.key), (3, [0, 0, 10]));
+/// assert!((hit.t - 1.05).abs() < 0.01);
+/// assert!(index.raycast(&[0.05, 0.05, 0.0], &[0.0, 0.0, -1.0], 3.0).is_none());
+/// ```
+#[derive(Clone, Debug)]
+pub struct RenderIndex {
+    h: f64,
+    radius: f64,
+    max_range: f64,
+    entries: KeyMap<Renderable>,
+}
+
+impl RenderIndex {
+    /// Number of renderable voxels.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// True when nothing can be hit.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+
+    /// The first Gaussian the ray from `origin` along `dir` (any length) enters within
+    /// `max_t` metres: the smallest `t >= 0` with `(s + t u - mu)^T S^-1 (s + t u - mu) =
+    /// r^2` over the voxels in the 3x3x3 neighbourhoods of the voxels the ray walks
+    /// through; ellipsoids containing the origin are skipped, ties go to the smaller key.
+    /// The walk stops 2.5 cells beyond `max_t` or the best hit so far (as the core).
+    pub fn raycast(&self, origin: &[f64; 3], dir: &[f64; 3], max_t: f64) -> Option<RefHit> {
+        let norm = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
+        if !(origin.iter().all(|x| x.is_finite()) && norm.is_finite() && norm > 0.0)
+            || max_t.is_nan()
+            || max_t <= 0.0
+        {
+            return None;
+        }
+        let u = Vector3::new(dir[0], dir[1], dir[2]) / norm;
+        let s = Vector3::new(origin[0], origin[1], origin[2]);
+        let h = self.h;
+        let o = [0, 1, 2].map(|i| origin[i] / h);
+        if o.iter().any(|&x| x.abs() > KEY_LIMIT as f64) {
+            return None;
+        }
+        let mut k = o.map(|x| x.floor() as i32);
+        let mut best: Option<RefHit> = None;
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    self.examine(&[k[0] + dx, k[1] + dy, k[2] + dz], &s, &u, max_t, &mut best);
+                }
+            }
+        }
+        let mut step = [0; 3];
+        let mut t_next = [f64::INFINITY; 3];
+        let mut t_delta = [f64::INFINITY; 3];
+        for a in 0..3 {
+            if u[a] > 0.0 {
+                step[a] = 1;
+                t_next[a] = (k[a] as f64 + 1.0 - o[a]) / u[a];
+                t_delta[a] = 1.0 / u[a];
+            } else if u[a] < 0.0 {
+                step[a] = -1;
+                t_next[a] = (k[a] as f64 - o[a]) / u[a];
+                t_delta[a] = -1.0 / u[a];
+            }
+        }
+        let max_steps = (max_t / h).min(1e7) as u64 * 3 + 12;
+        for _ in 0..max_steps {
+            let mut a = 0;
+            for b in 1..3 {
+                if t_next[b] < t_next[a] {
+                    a = b;
+                }
+            }
+            let t_enter = t_next[a] * h;
+            if t_enter > max_t + 2.5 * h || best.is_some_and(|b| t_enter > b.t + 2.5 * h) {
+                break;
+            }
+            k[a] += step[a];
+            t_next[a] += t_delta[a];
+            // The 3x3x3 neighbourhood moved by one along `a`: its new face.
+            let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+            for db in -1..=1 {
+                for dc in -1..=1 {
+                    let mut cell = k;
+                    cell[a] += step[a];
+                    cell[b] += db;
+                    cell[c] += dc;
+                    self.examine(&cell, &s, &u, max_t, &mut best);
+                }
+            }
+        }
+        best
+    }
+
+    fn examine(
+        &self,
+        key: &Key,
+        s: &Vector3<f64>,
+        u: &Vector3<f64>,
+        max_t: f64,
+        best: &mut Option<RefHit>,
+    ) {
+        let Some(g) = self.entries.get(key) else {
+            return;
+        };
+        let d = s - g.mean;
+        let w = g.inv * u;
+        let a = u.dot(&w);
+        if a.is_nan() || a <= 0.0 {
+            return;
+        }
+        let b = 2.0 * w.dot(&d);
+        let c = d.dot(&(g.inv * d));
+        let r2 = self.radius * self.radius;
+        let d2 = c - b * b / (4.0 * a);
+        if d2 > r2 || c <= r2 {
+            return;
+        }
+        let t = -b / (2.0 * a) - ((r2 - d2) / a).sqrt();
+        if !(t >= 0.0 && t <= max_t) {
+            return;
+        }
+        if best.is_none_or(|h| t < h.t || (t == h.t && *key < h.key)) {
+            *best = Some(RefHit {
+                t,
+                class: g.class,
+                key: *key,
+            });
+        }
+    }
+
+    /// Renders what a camera at `pose` (camera to world, OpenCV axes) with pixel rays
+    /// `rays` sees, as the core's `Map::render`: per pixel the class of the first Gaussian
+    /// hit (0 void, [`INVALID_LABEL`] for nothing) and its distance along the ray (0 for
+    /// nothing); rays end at `max_range`. Rows in parallel.
+    pub fn render(
+        &self,
+        pose: &Isometry3<f32>,
+        rays: &Rays,
+        labels: &mut [u8],
+        distance: &mut [f32],
+    ) -> Result<(), Error> {
+        let (w, h) = (rays.width() as usize, rays.height() as usize);
+        if labels.len() != w * h || distance.len() != w * h {
+            return Err(Error::InvalidImage);
+        }
+        let r = pose.rotation.to_rotation_matrix().matrix().cast::<f64>();
+        let t = pose.translation.vector.cast::<f64>();
+        let origin = [t.x, t.y, t.z];
+        labels
+            .par_chunks_mut(w.max(1))
+            .zip(distance.par_chunks_mut(w.max(1)))
+            .enumerate()
+            .for_each(|(row, (labels, distance))| {
+                for (col, (l, d)) in labels.iter_mut().zip(distance.iter_mut()).enumerate() {
+                    let c = rays.ray(col as u32, row as u32);
+                    let dir = r * Vector3::new(c[0] as f64, c[1] as f64, c[2] as f64);
+                    match self.raycast(&origin, &[dir.x, dir.y, dir.z], self.max_range) {
+                        Some(hit) => {
+                            *l = hit.class;
+                            *d = hit.t as f32;
+                        }
+                        None => {
+                            *l = INVALID_LABEL;
+                            *d = 0.0;
+                        }
+                    }
+                }
+            });
+        Ok(())
+    }
+}
