@@ -1,15 +1,21 @@
 #!/usr/bin/env bash
 # Builds the Cortex-M4F firmware (targets/cortex-m4f), prints its flash and static RAM, and
-# runs it under QEMU (mps2-an386) with defmt output decoded by defmt-print. Exits non-zero
-# if anything fails, including the firmware's own checks. Installs what it needs when
-# missing (idempotent; fast when everything is present).
+# runs it under QEMU (mps2-an386) with defmt output decoded by defmt-print. The firmware
+# integrates the committed test vector (targets/cortex-m4f/vector/) and prints its snapshot
+# CRC and peak stack; this script checks that CRC against the host's (`sndt testvector
+# --check`, x86-64) and expected_crc.txt, and that static RAM + peak stack fit the RAM of
+# memory.x. Exits non-zero if anything fails, including the firmware's own checks. Installs
+# what it needs when missing (idempotent; fast when everything is present).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 FW_DIR=targets/cortex-m4f
 ELF="$FW_DIR/target/thumbv7em-none-eabihf/release/sndt-cortex-m4f"
-FLASH_BUDGET=$((1024 * 1024))
-RAM_BUDGET=$((512 * 1024))
+VECTOR="$FW_DIR/vector/frames.bin"
+# The budgets are memory.x's FLASH and RAM lengths (in K).
+kib_of() { awk -v r="$1" '$1 == r { for (i = 1; i <= NF; i++) if ($i == "LENGTH") { v = $(i + 2); sub(/[Kk],?$/, "", v); print v } }' "$FW_DIR/memory.x"; }
+FLASH_BUDGET=$(($(kib_of FLASH) * 1024))
+RAM_BUDGET=$(($(kib_of RAM) * 1024))
 
 step() { printf '\n==> %s\n' "$*"; }
 
@@ -35,7 +41,8 @@ fi
 
 step "build firmware (release, thumbv7em-none-eabihf)"
 # Its own workspace and .cargo/config.toml (target, runner, DEFMT_LOG): build from its dir.
-(cd "$FW_DIR" && cargo build --release --locked)
+# Its own target dir too, whatever CARGO_TARGET_DIR the caller set, so $ELF is the fresh build.
+(cd "$FW_DIR" && CARGO_TARGET_DIR="$PWD/target" cargo build --release --locked)
 
 step "firmware size"
 # size -A: section sizes in bytes. Flash = everything loaded from flash (vector table, text,
@@ -53,8 +60,43 @@ if ((flash > FLASH_BUDGET || ram > RAM_BUDGET)); then
 fi
 
 step "run firmware under QEMU (mps2-an386, Cortex-M4F)"
+# -icount shift=0: one instruction per virtual nanosecond, so the firmware's SysTick
+# (25 MHz) counts exactly one tick per 40 instructions.
 # pipefail: the status is QEMU's, i.e. the firmware's semihosting exit code (or timeout's 124).
+log="$(mktemp)"
+trap 'rm -f "$log"' EXIT
 timeout 60 qemu-system-arm -cpu cortex-m4 -machine mps2-an386 -nographic -monitor none \
-    -serial none -semihosting-config enable=on,target=native -kernel "$ELF" |
-    defmt-print -e "$ELF"
+    -serial none -semihosting-config enable=on,target=native -icount shift=0 -kernel "$ELF" |
+    defmt-print -e "$ELF" | tee "$log"
+
+step "cross-architecture CRC: Cortex-M4F firmware vs host (x86-64) vs expected_crc.txt"
+fw_crc=$(grep -oE 'snapshot crc 0x[0-9a-f]{8}' "$log" | awk '{ print $3 }' | tail -n 1 || true)
+host_crc=$(cargo run -q -p sndt-host --bin sndt -- testvector --check "$VECTOR" | awk '$1 == "crc" { print $2 }')
+expected=$(tr -d '[:space:]' <"$FW_DIR/vector/expected_crc.txt")
+printf 'Cortex-M4F (QEMU): %s\nhost (%s):     %s\nexpected_crc.txt:  %s\n' \
+    "${fw_crc:-none}" "$(uname -m)" "${host_crc:-none}" "$expected"
+if [ -z "$fw_crc" ] || [ "$fw_crc" != "$host_crc" ] || [ "$host_crc" != "$expected" ]; then
+    echo "error: snapshot CRCs differ across architectures" >&2
+    exit 1
+fi
+
+step "memory report"
+peak=$(grep -oE 'peak stack [0-9]+' "$log" | awk '{ print $3 }' | tail -n 1 || true)
+if [ -z "$peak" ]; then
+    echo "error: the firmware did not report its peak stack" >&2
+    exit 1
+fi
+ticks=$(grep -oE 'systick per frame [0-9]+' "$log" | awk '{ print $4 }' | tail -n 1 || true)
+printf 'flash:             %8d bytes (%d KiB of %d KiB)\n' "$flash" $(((flash + 1023) / 1024)) $((FLASH_BUDGET / 1024))
+printf 'static RAM:        %8d bytes\n' "$ram"
+printf 'peak stack:        %8d bytes (measured, paint-stack)\n' "$peak"
+printf 'RAM + peak stack:  %8d bytes (%d KiB of %d KiB in memory.x)\n' $((ram + peak)) $(((ram + peak + 1023) / 1024)) $((RAM_BUDGET / 1024))
+if [ -n "$ticks" ]; then
+    printf 'per frame:         %8d instructions (QEMU -icount: %d SysTick ticks x 40; 19,200 points of 160x120)\n' \
+        $((ticks * 40)) "$ticks"
+fi
+if ((ram + peak > RAM_BUDGET)); then
+    echo "error: static RAM + peak stack exceed the RAM budget of memory.x" >&2
+    exit 1
+fi
 echo "firmware: ok"

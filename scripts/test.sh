@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# The whole test suite: formatting, lints, docs, the no_std build for Cortex-M4F, and every
-# test (unit, property, integration, doc). Installs what it needs; idempotent.
+# The whole test suite: formatting, lints, docs, the no_std build for Cortex-M4F, the
+# firmware in QEMU and the core's tests on aarch64 (qemu-aarch64) with one snapshot CRC on
+# all three architectures, and every test (unit, property, integration, doc). Installs
+# what it needs; idempotent.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -23,9 +25,13 @@ step "sndt-core builds for thumbv7em-none-eabihf (no_std, no alloc)"
 cargo build -p sndt-core --target thumbv7em-none-eabihf --release
 cargo build -p sndt-core --target thumbv7em-none-eabihf --release --features defmt
 
-step "Cortex-M4F firmware: fmt, clippy, build, size, run in QEMU"
-(cd targets/cortex-m4f && cargo fmt --check && cargo clippy --release --locked -- -D warnings)
+step "Cortex-M4F firmware: fmt, clippy, build, size, run in QEMU, CRC vs host, memory report"
+(cd targets/cortex-m4f && cargo fmt --check && cargo clippy --release --locked -- -D warnings &&
+    cargo clippy --release --locked --features rtt -- -D warnings)
 bash scripts/firmware.sh
+
+step "aarch64: sndt-core tests (unit, property, doc) and the CRC check under qemu-aarch64"
+bash scripts/aarch64.sh
 
 step "cargo doc without warnings"
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --quiet

@@ -151,6 +151,60 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         .checked()
     }
 
+    /// An empty map whose memory is all zero bytes, for a `static` on a microcontroller: it
+    /// is placed in `.bss` (zeroed at start-up, no copy in flash) instead of `.data`, where a
+    /// `static` built with [`Map::new`] goes because [`Config::DEFAULT`] is not all zero.
+    ///
+    /// It holds no valid configuration yet (all fields zero, cell size 0): call
+    /// [`Map::reset`] once at start-up. Until then the map stays empty and inert: every
+    /// update fails with [`crate::Error::PoseOutOfRange`] and every query finds nothing.
+    ///
+    /// ```
+    /// use sndt_core::*;
+    /// let mut map: Map<64, 16, 4> = Map::zeroed();
+    /// let p = [LabeledPoint::new(Point3::new(0.0, 0.0, 1.0), Labels::top1(2)); 3];
+    /// assert_eq!(map.integrate(&Isometry3::identity(), &p).err(), Some(Error::PoseOutOfRange));
+    /// assert!(map.raycast(&Point3::origin(), &Vector3::z(), 5.0).is_none());
+    /// map.reset(Config::DEFAULT).unwrap(); // at start-up, e.g. for `static MAP: Mutex<RefCell<Map<..>>>`
+    /// assert_eq!(map.integrate(&Isometry3::identity(), &p).unwrap().points_used, 3);
+    /// ```
+    pub const fn zeroed() -> Self {
+        const {
+            assert!(C >= 1 && C <= 254, "CLASSES must be in 1..=254");
+            assert!(V >= 1 && B >= 1, "capacities must be at least 1");
+        };
+        Map {
+            config: Config {
+                cell_size: 0.0,
+                quant_bits: 0,
+                n_min: 0,
+                eigen_ratio: 0.0,
+                n_max: 0,
+                hit: 0.0,
+                miss: 0.0,
+                clamp_min: 0.0,
+                clamp_max: 0.0,
+                lambda: 0.0,
+                noise_base: 0.0,
+                noise_quadratic: 0.0,
+                max_range: 0.0,
+                top_k: 0,
+                min_score: 0,
+                miss_model: crate::MissModel::NdtOm,
+                render_radius: 0.0,
+            },
+            voxels: Table::new(),
+            blocks: Table::new(),
+            stats: MapStats {
+                frames: 0,
+                voxels_evicted: 0,
+                blocks_evicted: 0,
+                dropped_points: 0,
+                dropped_misses: 0,
+            },
+        }
+    }
+
     const fn checked(mut self) -> Self {
         if self.config.validate().is_err() {
             self.config = Config::DEFAULT;

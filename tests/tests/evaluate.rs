@@ -4,7 +4,9 @@
 
 use sndt_core::{Config, Pinhole};
 use sndt_host::dataset::{Dataset, Frame, LabelSource, Rays};
-use sndt_host::evaluate::{backproject, evaluate, integrate_frame, load_snapshot, save_snapshot, EvalMap, EvalOptions};
+use sndt_host::evaluate::{
+    backproject, evaluate, integrate_frame, load_snapshot, save_snapshot, EvalMap, EvalOptions,
+};
 use sndt_host::synth::{SynthOptions, Synthetic};
 use std::sync::Arc;
 
@@ -31,7 +33,12 @@ fn read_gray8(path: &std::path::Path) -> (u32, u32, Vec<u8>) {
     let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
     let mut reader = decoder.read_info().unwrap();
     let info = reader.info();
-    assert_eq!(info.color_type, png::ColorType::Grayscale, "{}", path.display());
+    assert_eq!(
+        info.color_type,
+        png::ColorType::Grayscale,
+        "{}",
+        path.display()
+    );
     assert_eq!(info.bit_depth, png::BitDepth::Eight);
     let (w, h) = (info.width, info.height);
     let mut buf = vec![0; reader.output_buffer_size().unwrap()];
@@ -56,11 +63,17 @@ fn evaluation_writes_backprojections_and_scores_gt_maps_well() {
     )
     .unwrap();
     assert_eq!(eval.trajectories.len(), 2);
-    assert!(eval.trajectories.iter().all(|t| t.frames == 8 && t.update_ms.len() == 8 && t.voxels > 100));
+    assert!(eval
+        .trajectories
+        .iter()
+        .all(|t| t.frames == 8 && t.update_ms.len() == 8 && t.voxels > 100));
     // Every frame has its PNG, plain 8-bit, values 0..=40 or 255, and it equals the
     // back-projection kept in memory.
     for id in data.frames() {
-        let path = out.join(&id.scene).join(&id.cam).join(format!("{:04}.png", id.index));
+        let path = out
+            .join(&id.scene)
+            .join(&id.cam)
+            .join(format!("{:04}.png", id.index));
         let (w, h, px) = read_gray8(&path);
         assert_eq!((w, h), (160, 120));
         assert!(px.iter().all(|&v| v <= 40 || v == 255));
@@ -72,7 +85,12 @@ fn evaluation_writes_backprojections_and_scores_gt_maps_well() {
     // Mapping with ground-truth labels reproduces them well at 10 cm (the paper: 72 % on
     // Hypersim); the labels fed in score 100 % against themselves.
     let m = eval.metrics();
-    assert!(m.miou > 0.6 && m.mpacc > 0.7, "mIoU {} mPAcc {}", m.miou, m.mpacc);
+    assert!(
+        m.miou > 0.6 && m.mpacc > 0.7,
+        "mIoU {} mPAcc {}",
+        m.miou,
+        m.mpacc
+    );
     assert!(m.invr < 0.05, "invR {}", m.invr);
     let input = eval.input.metrics();
     assert!((input.miou - 1.0).abs() < 1e-12);
@@ -82,7 +100,9 @@ fn evaluation_writes_backprojections_and_scores_gt_maps_well() {
         let f = data.load(id).unwrap();
         gt_pixels += f.labels.unwrap().iter().filter(|&&l| l != 0).count() as u64;
     }
-    let counted: u64 = (1..=40).map(|g| eval.confusion.cm[g].iter().sum::<u64>()).sum();
+    let counted: u64 = (1..=40)
+        .map(|g| eval.confusion.cm[g].iter().sum::<u64>())
+        .sum();
     assert_eq!(counted, gt_pixels);
     // JSON has the summary and per-trajectory figures.
     let j = eval.to_json();
@@ -95,12 +115,21 @@ fn evaluation_writes_backprojections_and_scores_gt_maps_well() {
 fn predicted_labels_make_worse_maps_than_ground_truth() {
     let data = split(6);
     let run = |labels| {
-        evaluate(&data, &EvalOptions::new(Config::with_cell_size(0.1), labels), &|| {})
-            .unwrap()
-            .metrics()
+        evaluate(
+            &data,
+            &EvalOptions::new(Config::with_cell_size(0.1), labels),
+            &|| {},
+        )
+        .unwrap()
+        .metrics()
     };
     let (gt, pred) = (run(LabelSource::Gt), run(LabelSource::Pred));
-    assert!(gt.miou > pred.miou + 0.2, "GT {} vs predicted {}", gt.miou, pred.miou);
+    assert!(
+        gt.miou > pred.miou + 0.2,
+        "GT {} vs predicted {}",
+        gt.miou,
+        pred.miou
+    );
     // Same geometry either way: the invalid ratio does not depend on the labels.
     assert!((gt.invr - pred.invr).abs() < 1e-9);
 }
@@ -127,9 +156,16 @@ fn per_pixel_rays_backproject_like_the_pinhole() {
         }),
         ..f.clone()
     };
-    let (a, b) = (backproject(map.as_ref(), &f).unwrap(), backproject(map.as_ref(), &g).unwrap());
+    let (a, b) = (
+        backproject(map.as_ref(), &f).unwrap(),
+        backproject(map.as_ref(), &g).unwrap(),
+    );
     let same = a.iter().zip(&b).filter(|(x, y)| x == y).count();
-    assert!(same as f64 >= 0.995 * a.len() as f64, "{same} of {} pixels agree", a.len());
+    assert!(
+        same as f64 >= 0.995 * a.len() as f64,
+        "{same} of {} pixels agree",
+        a.len()
+    );
 }
 
 #[test]
@@ -151,6 +187,9 @@ fn snapshots_round_trip_through_files() {
     bytes[mid] ^= 0x55;
     std::fs::write(&path, &bytes).unwrap();
     let err = load_snapshot(&path).err().unwrap();
-    assert!(err.to_string().contains(&path.display().to_string()), "{err}");
+    assert!(
+        err.to_string().contains(&path.display().to_string()),
+        "{err}"
+    );
     std::fs::remove_file(&path).unwrap();
 }

@@ -1,202 +1,74 @@
-//! Firmware smoke test: integrates a synthetic scene (wall, door, floor seen from 4 poses)
-//! into a `Map<4096, 512, 40>` on a Cortex-M4F, ray casts it, checks the hits and prints
-//! the map's counts and CRC over defmt (semihosting). Exit status 0 only if all checks pass.
+//! Firmware test for Cortex-M4F (QEMU `mps2-an386`, or real hardware with `--features rtt`).
+//!
+//! Integrates the committed test vector (`vector/frames.bin`: 4 labelled depth frames of
+//! 160x120 of a synthetic room corner, written by `sndt testvector`) into a
+//! `static` `Map<4096, 512, 40>`, ray casts the vector's probe pixels, and reports over defmt:
+//! per-frame SysTick ticks, voxels, blocks, evictions, the snapshot CRC (which must equal
+//! `vector/expected_crc.txt`, the host's CRC for the same frames), static RAM and the peak
+//! stack (cortex-m-rt `paint-stack`). Exit status 0 (semihosting) only when every check
+//! passes; a panic or HardFault exits non-zero.
 #![no_std]
 #![no_main]
+
+mod vector;
 
 use core::cell::RefCell;
 
 use cortex_m::interrupt::{self, Mutex};
-use cortex_m_rt::{entry, exception, ExceptionFrame};
+use cortex_m::peripheral::{syst::SystClkSource, DWT, SYST};
+use cortex_m_rt::{entry, exception, ExceptionFrame, STACK_PAINT_VALUE};
 use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
+#[cfg(feature = "rtt")]
+use defmt_rtt as _;
+#[cfg(not(feature = "rtt"))]
 use defmt_semihosting as _;
 use sndt_core::{
-    pose_from_matrix, Config, DepthImage, DepthKind, LabelImage, Map, Matrix3, Pinhole, Point3,
-    Vector3,
+    pose_from_matrix, Config, DepthImage, DepthKind, LabelImage, Map, Matrix3, Point3, Vector3,
 };
+use vector::Vector;
 
-type FwMap = Map<4096, 512, 40>;
+const VOXELS: usize = 4096;
+const BLOCKS: usize = 512;
+const CLASSES: usize = 40;
+type FwMap = Map<VOXELS, BLOCKS, CLASSES>;
 
-/// The whole map lives in one static (no heap, no `static mut`).
-static MAP: Mutex<RefCell<FwMap>> = Mutex::new(RefCell::new(FwMap::new(Config::DEFAULT)));
+/// The whole map lives in one zero-initialised static (`.bss`: no flash copy); `run`
+/// installs its config with `Map::reset`.
+static MAP: Mutex<RefCell<FwMap>> = Mutex::new(RefCell::new(FwMap::zeroed()));
 
-// ---------------------------------------------------------------------------------------
-// Synthetic scene, computed analytically at compile time (the images live in flash).
-// World: z up. Wall plane x = WALL_X (class WALL, with a DOOR region), floor z = 0 (FLOOR).
-// ---------------------------------------------------------------------------------------
+/// The test vector in flash, 4-byte aligned so depth images are read as `&[f32]` in place.
+#[repr(C, align(4))]
+struct Aligned<T: ?Sized>(T);
+static VECTOR: &Aligned<[u8]> = &Aligned(*include_bytes!("../vector/frames.bin"));
+/// The host's snapshot CRC for the vector (`sndt testvector`).
+const EXPECTED_CRC: &str = include_str!("../vector/expected_crc.txt");
 
-const W: usize = 160;
-const H: usize = 120;
-const N: usize = W * H;
-const CAM: Pinhole = Pinhole {
-    fx: 120.0,
-    fy: 120.0,
-    cx: 80.0,
-    cy: 60.0,
-    width: W as u32,
-    height: H as u32,
-};
-
-const WALL_X: f32 = 3.0;
-const WALL: u8 = 1; // NYU40 "wall"
-const FLOOR: u8 = 2; // NYU40 "floor"
-const DOOR: u8 = 8; // NYU40 "door"
-const DOOR_Y: (f32, f32) = (0.6, 1.4);
-const DOOR_Z: f32 = 2.0;
-
-/// A camera pose: yaw (cos, sin) about world z and the optical centre; the camera looks
-/// horizontally (OpenCV axes: x right, y down, z forward).
-struct PoseDef {
-    c: f32,
-    s: f32,
-    t: [f32; 3],
-}
-
-const POSES: [PoseDef; 4] = [
-    PoseDef {
-        c: 1.0,
-        s: 0.0,
-        t: [0.0, 0.0, 1.2],
-    },
-    PoseDef {
-        c: 0.988_771_1,
-        s: 0.149_438_13,
-        t: [0.3, -0.2, 1.2],
-    }, // yaw +0.15 rad
-    PoseDef {
-        c: 0.988_771_1,
-        s: -0.149_438_13,
-        t: [0.3, 0.2, 1.2],
-    }, // yaw -0.15 rad
-    PoseDef {
-        c: 0.998_750_26,
-        s: 0.049_979_17,
-        t: [0.6, 0.0, 1.0],
-    }, // yaw +0.05 rad
-];
-
-impl PoseDef {
-    /// Camera-to-world rotation, row-major.
-    const fn rot(&self) -> [[f32; 3]; 3] {
-        [
-            [self.s, 0.0, self.c],
-            [-self.c, 0.0, self.s],
-            [0.0, -1.0, 0.0],
-        ]
-    }
-}
-
-/// Planar depth (0 = no hit) and class of pixel `(col, row)` seen from pose `p`.
-const fn pixel(p: &PoseDef, col: usize, row: usize) -> (f32, u8) {
-    let rx = (col as f32 + 0.5 - CAM.cx) / CAM.fx;
-    let ry = (row as f32 + 0.5 - CAM.cy) / CAM.fy;
-    let r = p.rot();
-    let d = [
-        r[0][0] * rx + r[0][1] * ry + r[0][2],
-        r[1][0] * rx + r[1][1] * ry + r[1][2],
-        r[2][0] * rx + r[2][1] * ry + r[2][2],
-    ];
-    // The camera ray has unit z, so the ray parameter is the planar depth.
-    let mut depth = 0.0f32;
-    let mut class = 0u8;
-    if d[0] > 1e-6 {
-        let t = (WALL_X - p.t[0]) / d[0];
-        let (y, z) = (p.t[1] + t * d[1], p.t[2] + t * d[2]);
-        if t > 0.0 && z >= 0.0 {
-            depth = t;
-            class = if y >= DOOR_Y.0 && y <= DOOR_Y.1 && z <= DOOR_Z {
-                DOOR
-            } else {
-                WALL
-            };
-        }
-    }
-    if d[2] < -1e-6 {
-        let t = -p.t[2] / d[2];
-        if t > 0.0 && (depth == 0.0 || t < depth) {
-            depth = t;
-            class = FLOOR;
-        }
-    }
-    (depth, class)
-}
-
-const fn depth_image(p: &PoseDef) -> [f32; N] {
-    let mut out = [0.0f32; N];
-    let mut i = 0;
-    while i < N {
-        out[i] = pixel(p, i % W, i / W).0;
-        i += 1;
-    }
-    out
-}
-
-const fn label_image(p: &PoseDef) -> [u8; N] {
-    let mut out = [0u8; N];
-    let mut i = 0;
-    while i < N {
-        out[i] = pixel(p, i % W, i / W).1;
-        i += 1;
-    }
-    out
-}
-
-static DEPTH: [[f32; N]; 4] = [
-    depth_image(&POSES[0]),
-    depth_image(&POSES[1]),
-    depth_image(&POSES[2]),
-    depth_image(&POSES[3]),
-];
-static LABELS: [[u8; N]; 4] = [
-    label_image(&POSES[0]),
-    label_image(&POSES[1]),
-    label_image(&POSES[2]),
-    label_image(&POSES[3]),
-];
-
-/// A ray cast check: origin, direction (world), expected distance and class.
-struct Probe {
-    origin: [f32; 3],
-    dir: [f32; 3],
-    t: f32,
-    class: u8,
-}
-
-const PROBES: [Probe; 4] = [
-    // Straight at the wall from pose 0.
-    Probe {
-        origin: [0.0, 0.0, 1.2],
-        dir: [1.0, 0.0, 0.0],
-        t: WALL_X,
-        class: WALL,
-    },
-    // At the door region.
-    Probe {
-        origin: [0.0, 1.0, 1.2],
-        dir: [1.0, 0.0, 0.0],
-        t: WALL_X,
-        class: DOOR,
-    },
-    // Wall to the right, from pose 3.
-    Probe {
-        origin: [0.6, -1.0, 1.0],
-        dir: [1.0, 0.0, 0.0],
-        t: WALL_X - 0.6,
-        class: WALL,
-    },
-    // Down to the floor at x = 2.7: |(2.7, 0, -1.2)| = 2.954657.
-    Probe {
-        origin: [0.0, 0.0, 1.2],
-        dir: [2.7, 0.0, -1.2],
-        t: 2.954_657,
-        class: FLOOR,
-    },
-];
+/// Distance tolerance of a probe, metres (as `sndt testvector`).
 const T_TOL: f32 = 0.15;
+/// Stack headroom that must stay painted: less means the stack (nearly) ran into `.bss`.
+const STACK_MARGIN: usize = 256;
 
 #[entry]
 fn main() -> ! {
-    let ok = interrupt::free(|cs| run(&mut MAP.borrow(cs).borrow_mut()));
+    let mut ok = match cortex_m::Peripherals::take() {
+        Some(mut p) => {
+            // Two clocks per frame. DWT CYCCNT: core cycles on hardware (QEMU reads 0).
+            p.DCB.enable_trace();
+            DWT::unlock();
+            p.DWT.enable_cycle_counter();
+            // SysTick as a free-running 24-bit down-counter on the core clock (no interrupt):
+            // cycles on hardware (up to 2^24); in QEMU with `-icount shift=0` one tick is
+            // 40 instructions (25 MHz virtual clock, 1 ns per instruction).
+            let mut syst = p.SYST;
+            syst.set_clock_source(SystClkSource::Core);
+            syst.set_reload(0x00ff_ffff);
+            syst.clear_current();
+            syst.enable_counter();
+            interrupt::free(|cs| run(&mut MAP.borrow(cs).borrow_mut(), &mut syst))
+        }
+        None => false,
+    };
+    ok &= stack_report();
     if ok {
         defmt::println!("sndt firmware: PASS");
         debug::exit(EXIT_SUCCESS);
@@ -209,36 +81,75 @@ fn main() -> ! {
     }
 }
 
-fn run(map: &mut FwMap) -> bool {
-    let mut ok = true;
+/// SysTick ticks elapsed since `start` (a previous `SYST::get_current()`), or `None` if the
+/// counter wrapped (more than 2^24 ticks).
+fn ticks_since(syst: &mut SYST, start: u32) -> Option<u32> {
+    let now = SYST::get_current();
+    if syst.has_wrapped() {
+        None
+    } else {
+        Some(start.wrapping_sub(now) & 0x00ff_ffff)
+    }
+}
+
+fn run(map: &mut FwMap, syst: &mut SYST) -> bool {
+    let v = match Vector::parse(&VECTOR.0, VOXELS, BLOCKS, CLASSES) {
+        Ok(v) => v,
+        Err(e) => {
+            defmt::error!("test vector: {}", e);
+            return false;
+        }
+    };
+    if map.reset(Config::with_cell_size(v.cell_size)).is_err() {
+        defmt::error!("test vector: invalid cell size {=f32}", v.cell_size);
+        return false;
+    }
     defmt::println!(
-        "map: Map<4096, 512, 40> = {=usize} bytes ({=usize} per voxel)",
+        "map: Map<{=usize}, {=usize}, {=usize}> = {=usize} bytes ({=usize} per voxel); vector: {=usize} frames of {=u32}x{=u32}, cell {=f32} m",
+        VOXELS,
+        BLOCKS,
+        CLASSES,
         FwMap::BYTES,
-        FwMap::VOXEL_BYTES
+        FwMap::VOXEL_BYTES,
+        v.frames,
+        v.camera.width,
+        v.camera.height,
+        v.cell_size
     );
-    for (k, p) in POSES.iter().enumerate() {
-        let r = p.rot();
-        let rot = Matrix3::new(
-            r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1], r[2][2],
-        );
-        let pose = match pose_from_matrix(&rot, &Vector3::new(p.t[0], p.t[1], p.t[2])) {
-            Ok(pose) => pose,
-            Err(_) => {
-                defmt::error!("frame {=usize}: invalid pose", k);
+    let mut ok = true;
+    let (mut total_ticks, mut total_cycles) = (0u32, 0u32);
+    for k in 0..v.frames {
+        let f = match v.frame(k) {
+            Ok(f) => f,
+            Err(e) => {
+                defmt::error!("frame {=usize}: {}", k, e);
                 return false;
             }
         };
+        let r = &f.rotation;
+        let rot = Matrix3::new(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8]);
+        let t = Vector3::new(f.translation[0], f.translation[1], f.translation[2]);
+        let Ok(pose) = pose_from_matrix(&rot, &t) else {
+            defmt::error!("frame {=usize}: invalid pose", k);
+            return false;
+        };
         let image = DepthImage {
-            camera: CAM,
-            depth: &DEPTH[k],
+            camera: v.camera,
+            depth: f.depth,
             kind: DepthKind::Planar,
-            labels: LabelImage::Top1(&LABELS[k]),
+            labels: LabelImage::Top1(f.labels),
             stride: 1,
         };
-        match map.integrate_depth(&pose, &image) {
+        let _ = syst.has_wrapped(); // clears COUNTFLAG
+        let (start, c0) = (SYST::get_current(), DWT::cycle_count());
+        let result = map.integrate_depth(&pose, &image);
+        let cycles = DWT::cycle_count().wrapping_sub(c0);
+        let ticks = ticks_since(syst, start);
+        total_cycles = total_cycles.saturating_add(cycles);
+        match result {
             Ok(rep) => {
                 defmt::println!(
-                    "frame {=usize}: points {=u32}, end voxels {=u32}, rays {=u32}, voxels +{=u32} -{=u32}, blocks +{=u32} -{=u32}, dropped {=u32}/{=u32}",
+                    "frame {=usize}: points {=u32}, end voxels {=u32}, rays {=u32}, voxels +{=u32} -{=u32}, blocks +{=u32} -{=u32}, dropped {=u32}/{=u32}, systick {=u32}, dwt cycles {=u32}",
                     k,
                     rep.points_used,
                     rep.end_voxels,
@@ -248,33 +159,65 @@ fn run(map: &mut FwMap) -> bool {
                     rep.blocks_created,
                     rep.blocks_evicted,
                     rep.dropped_points,
-                    rep.dropped_misses
+                    rep.dropped_misses,
+                    ticks.unwrap_or(u32::MAX),
+                    cycles
                 );
-                if rep.points_used as usize != N || rep.rejected_label != 0 {
-                    defmt::error!("frame {=usize}: not every pixel was used", k);
+                match ticks {
+                    Some(t) => total_ticks = total_ticks.saturating_add(t),
+                    None => defmt::warn!("frame {=usize}: SysTick wrapped, no timing", k),
+                }
+                if rep.rejected_label != 0 || rep.rejected_out_of_range != 0 {
+                    defmt::error!("frame {=usize}: points were rejected", k);
                     ok = false;
                 }
             }
-            Err(_) => {
-                defmt::error!("frame {=usize}: integrate_depth failed", k);
+            Err(e) => {
+                defmt::error!("frame {=usize}: integrate_depth: {}", k, e);
                 ok = false;
             }
         }
     }
+    let frames = v.frames.max(1) as u32;
+    defmt::println!(
+        "systick per frame {=u32}, dwt cycles per frame {=u32} (means over {=u32} frames; cycles are 0 without a cycle counter, as in QEMU)",
+        total_ticks / frames,
+        total_cycles / frames,
+        frames
+    );
 
-    for (i, pr) in PROBES.iter().enumerate() {
-        let dir = Vector3::new(pr.dir[0], pr.dir[1], pr.dir[2]).normalize();
-        let origin = Point3::new(pr.origin[0], pr.origin[1], pr.origin[2]);
-        match map.raycast(&origin, &dir, 10.0) {
+    for i in 0..v.probes {
+        let Some((k, col, row)) = v.probe(i) else {
+            return false;
+        };
+        let Ok(f) = v.frame(k) else {
+            defmt::error!("probe {=usize}: no frame {=usize}", i, k);
+            return false;
+        };
+        let r = &f.rotation;
+        let rot = Matrix3::new(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8]);
+        let t = Vector3::new(f.translation[0], f.translation[1], f.translation[2]);
+        let Ok(pose) = pose_from_matrix(&rot, &t) else {
+            return false;
+        };
+        let ray = v.camera.ray(col, row);
+        let ray = Vector3::new(ray[0], ray[1], ray[2]);
+        let px = (row * v.camera.width + col) as usize;
+        let (want_t, want_class) = (f.depth[px] * ray.norm(), f.labels[px]);
+        let origin = Point3::from(pose.translation.vector);
+        match map.raycast(&origin, &(pose.rotation * ray), 10.0) {
             Some(hit) => {
-                let good = (hit.t - pr.t).abs() < T_TOL && hit.class == pr.class;
+                let good = (hit.t - want_t).abs() < T_TOL && hit.class == want_class;
                 defmt::println!(
-                    "probe {=usize}: t = {=f32} (expected {=f32}), class {=u8} (expected {=u8}) {=str}",
+                    "probe {=usize} (frame {=usize}, pixel {=u32},{=u32}): t {=f32} (expected {=f32}), class {=u8} (expected {=u8}) {=str}",
                     i,
+                    k,
+                    col,
+                    row,
                     hit.t,
-                    pr.t,
+                    want_t,
                     hit.class,
-                    pr.class,
+                    want_class,
                     if good { "ok" } else { "WRONG" }
                 );
                 ok &= good;
@@ -296,8 +239,62 @@ fn run(map: &mut FwMap) -> bool {
         stats.voxels_evicted,
         stats.blocks_evicted
     );
-    defmt::println!("checksum (CRC-32) {=u32:#010x}", map.checksum());
-    ok &= voxels > 0 && stats.frames == POSES.len() as u32;
+    let crc = map.checksum();
+    let Some(expected) = vector::parse_crc(EXPECTED_CRC) else {
+        defmt::error!("vector/expected_crc.txt is not 0x........");
+        return false;
+    };
+    defmt::println!(
+        "snapshot crc {=u32:#010x} (expected {=u32:#010x}) {=str}",
+        crc,
+        expected,
+        if crc == expected { "ok" } else { "MISMATCH" }
+    );
+    ok &= crc == expected && stats.frames == v.frames as u32;
+    ok
+}
+
+/// Reports static RAM and the peak stack, and checks the stack kept some paint.
+fn stack_report() -> bool {
+    extern "C" {
+        static _ram_start: u32;
+        static _ram_end: u32;
+        static _stack_start: u32;
+        static _stack_end: u32;
+    }
+    // Addresses of linker symbols only (taking them is safe; nothing is read through them).
+    let ram_start = &raw const _ram_start as usize;
+    let ram_end = &raw const _ram_end as usize;
+    let top = &raw const _stack_start as usize;
+    let bottom = &raw const _stack_end as usize;
+    // cortex-m-rt's `paint-stack` filled [bottom, top) with STACK_PAINT_VALUE before `main`;
+    // the lowest word that lost its paint is the deepest the stack has reached.
+    let mut p = bottom;
+    while p < top {
+        // SAFETY: `p` is 4-byte aligned (cortex-m-rt aligns `_stack_end`) and inside the
+        // stack region in RAM, which is always readable; a volatile read of a `u32` there
+        // has no side effects.
+        let word = unsafe { core::ptr::read_volatile(p as *const u32) };
+        if word != STACK_PAINT_VALUE {
+            break;
+        }
+        p += 4;
+    }
+    let (static_ram, stack, peak) = (bottom - ram_start, top - bottom, top - p);
+    defmt::println!(
+        "static RAM {=usize} bytes, peak stack {=usize} bytes (of {=usize}), RAM budget {=usize} bytes",
+        static_ram,
+        peak,
+        stack,
+        ram_end - ram_start
+    );
+    let ok = peak + STACK_MARGIN <= stack;
+    if !ok {
+        defmt::error!(
+            "the stack reached within {=usize} bytes of .bss",
+            STACK_MARGIN
+        );
+    }
     ok
 }
 

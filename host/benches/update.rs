@@ -1,6 +1,6 @@
 //! Update time of one 1024x768 frame of the box room at 5, 10, 15 and 20 cm.
 //!
-//! `cargo bench -p sndt-core` prints ms/frame and points/s (single thread, release).
+//! `cargo bench -p sndt-host --bench update` prints ms/frame and points/s (single thread, release).
 //! Each cell size maps the same 12 frames of a walk around the room into a fresh map; the
 //! first frame (all voxels new) and the steady state are reported separately.
 

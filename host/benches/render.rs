@@ -1,6 +1,6 @@
 //! Render (back-projection) time of one 1024x768 frame of the box room at 5, 10 and 20 cm.
 //!
-//! `cargo bench -p sndt-core --bench render` prints ms/frame and ns/pixel (single thread,
+//! `cargo bench -p sndt-host --bench render` prints ms/frame and ns/pixel (single thread,
 //! release). Each cell size maps the 12 frames of a walk around the room into a fresh map,
 //! then renders the map at those poses (`SNDT_RENDER_POSES=n` renders only the first `n`;
 //! `SNDT_RENDER_CELLS=5,10` picks cell sizes in cm). The median over the poses is reported,

@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# Runs sndt-core's tests (unit, property, doc) and the cross-architecture CRC check
+# (tests/tests/crosscheck.rs) for aarch64-unknown-linux-gnu under qemu-aarch64, and checks
+# that the aarch64 snapshot CRC of the test vector equals the committed one
+# (targets/cortex-m4f/vector/expected_crc.txt), as on x86-64 and the Cortex-M4F firmware.
+# Installs what it needs when missing (idempotent; fast when everything is present).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+TARGET=aarch64-unknown-linux-gnu
+step() { printf '\n==> %s\n' "$*"; }
+start=$SECONDS
+
+step "aarch64 toolchain (rustup target, cross gcc, qemu-user)"
+if ! rustup target list --installed | grep -qx "$TARGET"; then
+    rustup target add "$TARGET"
+fi
+if ! command -v aarch64-linux-gnu-gcc >/dev/null 2>&1 || ! command -v qemu-aarch64 >/dev/null 2>&1 ||
+    ! [ -e /usr/aarch64-linux-gnu/lib/libc.so.6 ]; then
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq
+    pkgs=(gcc-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user)
+    # The image may ship qemu-utils from backports, which bookworm's qemu packages can
+    # conflict with; if apt would remove anything, pin the bookworm qemu-utils alongside
+    # (as scripts/firmware.sh does) so qemu-img stays installed.
+    if apt-get install -s --no-install-recommends "${pkgs[@]}" | grep -q '^Remv'; then
+        pkgs+=(qemu-utils/bookworm)
+    fi
+    apt-get install -y -qq --no-install-recommends --allow-downgrades "${pkgs[@]}"
+fi
+
+# Cross linker and the emulator as the test runner (-L: where the aarch64 loader and libc are).
+export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc
+export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64 -L /usr/aarch64-linux-gnu"
+# Emulated debug code is 30-100x slower than native: optimise the test builds (the test
+# profile keeps debug assertions and overflow checks on, as in the x86-64 `cargo test`).
+export CARGO_PROFILE_TEST_OPT_LEVEL=2
+
+log="$(mktemp)"
+trap 'rm -f "$log"' EXIT
+
+step "cargo test -p sndt-core --target $TARGET (unit, property, doc tests under qemu-aarch64)"
+cargo test -p sndt-core --target "$TARGET" 2>&1 | tee "$log"
+doctests=$(awk '/Doc-tests/ { d = 1 } d && /^test result:/ { print $4; exit }' "$log")
+if [ -z "$doctests" ] || [ "$doctests" -eq 0 ]; then
+    echo "error: no doc tests ran for $TARGET" >&2
+    exit 1
+fi
+
+step "cross-architecture CRC check on $TARGET (tests/tests/crosscheck.rs)"
+cargo test -p sndt-tests --test crosscheck --target "$TARGET" -- --nocapture 2>&1 | tee -a "$log"
+expected=$(tr -d '[:space:]' <targets/cortex-m4f/vector/expected_crc.txt)
+crc=$(grep -oE 'crosscheck: aarch64 snapshot crc 0x[0-9a-f]{8}' "$log" | awk '{ print $NF }' | tail -n 1)
+if [ "$crc" != "$expected" ]; then
+    echo "error: aarch64 snapshot CRC '${crc:-none}' differs from expected_crc.txt ($expected)" >&2
+    exit 1
+fi
+awk '/^test result:/ { p += $4; f += $6 } END { printf "\naarch64: %d passed, %d failed\n", p, f }' "$log"
+echo "aarch64 (qemu-aarch64): snapshot CRC $crc = expected_crc.txt; took $((SECONDS - start)) s"
