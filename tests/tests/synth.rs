@@ -6,7 +6,7 @@ use sndt_core::{Isometry3, Pinhole, Point3, Vector3};
 use sndt_host::dataset::{self, Dataset, FrameId, OpenOptions};
 use sndt_host::eval::Confusion;
 use sndt_host::room::look_at;
-use sndt_host::synth::geometry::{Bvh, Primitive, Shape};
+use sndt_host::synth::geometry::{Bvh, Primitive};
 use sndt_host::synth::scenes::{SceneKind, SynthScene};
 use sndt_host::synth::{self, render, trajectory, DepthNoise, SynthOptions, Synthetic};
 
@@ -20,25 +20,7 @@ const SMALL: Pinhole = Pinhole {
 };
 
 fn aabb(min: [f32; 3], max: [f32; 3], label: u8) -> Primitive {
-    let center = [
-        0.5 * (min[0] + max[0]),
-        0.5 * (min[1] + max[1]),
-        0.5 * (min[2] + max[2]),
-    ];
-    let half = [
-        0.5 * (max[0] - min[0]),
-        0.5 * (max[1] - min[1]),
-        0.5 * (max[2] - min[2]),
-    ];
-    Primitive {
-        shape: Shape::Box {
-            center,
-            half,
-            yaw: 0.0,
-        },
-        label,
-        instance: label as u16,
-    }
+    Primitive::axis_box(min, max, label, label as u16)
 }
 
 /// A 4 x 3 x 2.5 m room with one table-sized box in it.

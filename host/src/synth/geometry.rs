@@ -40,6 +40,29 @@ pub struct Primitive {
     pub instance: u16,
 }
 
+impl Primitive {
+    /// An axis-aligned box from its corners.
+    ///
+    /// ```
+    /// use sndt_host::synth::geometry::{Primitive, Shape};
+    /// let p = Primitive::axis_box([0.0, 0.0, 0.0], [2.0, 1.0, 1.0], 7, 3);
+    /// assert_eq!(p.shape, Shape::Box { center: [1.0, 0.5, 0.5], half: [1.0, 0.5, 0.5], yaw: 0.0 });
+    /// ```
+    pub fn axis_box(min: [f32; 3], max: [f32; 3], label: u8, instance: u16) -> Primitive {
+        let center = std::array::from_fn(|a| 0.5 * (min[a] + max[a]));
+        let half = std::array::from_fn(|a| 0.5 * (max[a] - min[a]));
+        Primitive {
+            shape: Shape::Box {
+                center,
+                half,
+                yaw: 0.0,
+            },
+            label,
+            instance,
+        }
+    }
+}
+
 /// An axis-aligned bounding box.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {

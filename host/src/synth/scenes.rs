@@ -245,25 +245,8 @@ impl Builder {
     }
 
     fn aabb(&mut self, min: [f32; 3], max: [f32; 3], label: u8, instance: u16) {
-        let center = [
-            0.5 * (min[0] + max[0]),
-            0.5 * (min[1] + max[1]),
-            0.5 * (min[2] + max[2]),
-        ];
-        let half = [
-            0.5 * (max[0] - min[0]),
-            0.5 * (max[1] - min[1]),
-            0.5 * (max[2] - min[2]),
-        ];
-        self.prims.push(Primitive {
-            shape: Shape::Box {
-                center,
-                half,
-                yaw: 0.0,
-            },
-            label,
-            instance,
-        });
+        self.prims
+            .push(Primitive::axis_box(min, max, label, instance));
     }
 
     /// A box given in a place's local frame.
