@@ -4,7 +4,7 @@
 //! Reference numbers marked "h5py" were printed by h5py 3.16 / numpy reading the same
 //! files independently of this crate's HDF5 reader.
 
-use sndt_core::{DepthKind, Matrix3, Pinhole, Vector3};
+use sndt_core::{DepthKind, Matrix3, Vector3};
 use sndt_host::dataset::{self, Dataset, Frame, FrameId, OpenOptions, Rays};
 use sndt_host::hypersim::{self, Hypersim};
 use std::path::{Path, PathBuf};
@@ -233,14 +233,7 @@ fn fixture_frame_zero_floor_is_a_horizontal_plane() {
 
     // The same pixels through the nominal pinhole: the floor tilts by ~5 degrees and
     // sinks by ~0.4 m, because ai_037_002 is a tilt-shift camera.
-    let nominal = Pinhole {
-        fx: 886.81,
-        fy: 886.81,
-        cx: 512.0,
-        cy: 384.0,
-        width: 1024,
-        height: 768,
-    };
+    let nominal = sndt_host::room::HYPERSIM_CAMERA;
     let pin = Frame {
         rays: Arc::new(Rays::Pinhole(nominal)),
         ..f.clone()
