@@ -129,13 +129,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     pub const BYTES: usize =
         (MAP_HEADER_BYTES + V * Self::VOXEL_BYTES + B * BLOCK_BYTES).div_ceil(8) * 8;
 
-    /// An empty map. Invalid configs are replaced by [`Config::DEFAULT`]; use
-    /// [`Map::try_new`] to get an error instead.
-    pub const fn new(config: Config) -> Self {
-        const {
-            assert!(C >= 1 && C <= 254, "CLASSES must be in 1..=254");
-            assert!(V >= 1 && B >= 1, "capacities must be at least 1");
-        };
+    /// An empty map with `config` as given (callers check it).
+    const fn empty(config: Config) -> Self {
         Map {
             config,
             voxels: Table::new(),
@@ -148,7 +143,16 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 dropped_misses: 0,
             },
         }
-        .checked()
+    }
+
+    /// An empty map. Invalid configs are replaced by [`Config::DEFAULT`]; use
+    /// [`Map::try_new`] to get an error instead.
+    pub const fn new(config: Config) -> Self {
+        const {
+            assert!(C >= 1 && C <= 254, "CLASSES must be in 1..=254");
+            assert!(V >= 1 && B >= 1, "capacities must be at least 1");
+        };
+        Self::empty(config).checked()
     }
 
     /// An empty map whose memory is all zero bytes, for a `static` on a microcontroller: it
@@ -173,36 +177,25 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             assert!(C >= 1 && C <= 254, "CLASSES must be in 1..=254");
             assert!(V >= 1 && B >= 1, "capacities must be at least 1");
         };
-        Map {
-            config: Config {
-                cell_size: 0.0,
-                quant_bits: 0,
-                n_min: 0,
-                eigen_ratio: 0.0,
-                n_max: 0,
-                hit: 0.0,
-                miss: 0.0,
-                clamp_min: 0.0,
-                clamp_max: 0.0,
-                lambda: 0.0,
-                noise_base: 0.0,
-                noise_quadratic: 0.0,
-                max_range: 0.0,
-                top_k: 0,
-                min_score: 0,
-                miss_model: crate::MissModel::NdtOm,
-                render_radius: 0.0,
-            },
-            voxels: Table::new(),
-            blocks: Table::new(),
-            stats: MapStats {
-                frames: 0,
-                voxels_evicted: 0,
-                blocks_evicted: 0,
-                dropped_points: 0,
-                dropped_misses: 0,
-            },
-        }
+        Self::empty(Config {
+            cell_size: 0.0,
+            quant_bits: 0,
+            n_min: 0,
+            eigen_ratio: 0.0,
+            n_max: 0,
+            hit: 0.0,
+            miss: 0.0,
+            clamp_min: 0.0,
+            clamp_max: 0.0,
+            lambda: 0.0,
+            noise_base: 0.0,
+            noise_quadratic: 0.0,
+            max_range: 0.0,
+            top_k: 0,
+            min_score: 0,
+            miss_model: crate::MissModel::NdtOm,
+            render_radius: 0.0,
+        })
     }
 
     const fn checked(mut self) -> Self {
