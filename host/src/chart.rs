@@ -88,3 +88,81 @@ pub fn iou_bars(path: &Path, title: &str, series: &[(&str, &[Option<f64>; 41])])
     root.present().map_err(err)?;
     Ok(())
 }
+
+/// Named series of points `(x, y, label)`.
+pub type LabelledSeries = [(String, Vec<(f64, f64, String)>)];
+
+/// A scatter plot of map update rate (Hz, log scale) against mIoU (%): one marker colour
+/// per series, each point labelled (e.g. with its cell size), points of a series joined.
+///
+/// ```
+/// let dir = std::env::temp_dir().join(format!("sndt-rate-{}", std::process::id()));
+/// std::fs::create_dir_all(&dir).unwrap();
+/// let path = dir.join("rate.svg");
+/// let s = vec![("S-NDT".to_string(), vec![(3.5, 72.0, "10cm".to_string()), (1.0, 78.0, "5cm".to_string())])];
+/// sndt_host::chart::rate_vs_miou(&path, "rate", &s).unwrap();
+/// let svg = std::fs::read_to_string(&path).unwrap();
+/// assert!(svg.contains("S-NDT") && svg.contains("10cm"));
+/// # std::fs::remove_dir_all(&dir).unwrap();
+/// ```
+pub fn rate_vs_miou(path: &Path, title: &str, series: &LabelledSeries) -> Result<()> {
+    let all = series.iter().flat_map(|(_, p)| p.iter());
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, 0f64, f64::INFINITY, 0f64);
+    for (x, y, _) in all {
+        x0 = x0.min(*x);
+        x1 = x1.max(*x);
+        y0 = y0.min(*y);
+        y1 = y1.max(*y);
+    }
+    if !(x0.is_finite() && x0 > 0.0) {
+        (x0, x1, y0, y1) = (0.1, 10.0, 0.0, 100.0);
+    }
+    let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
+    let err = |e: DrawingAreaErrorKind<_>| anyhow!("{}: {e:?}", path.display());
+    root.fill(&WHITE).map_err(err)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 20))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(55)
+        .build_cartesian_2d(
+            ((x0 / 1.5)..(x1 * 1.5)).log_scale(),
+            (y0 - 3.0).max(0.0)..(y1 + 3.0).min(100.0),
+        )
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("map update rate (Hz, single thread)")
+        .y_desc("mIoU (%)")
+        .draw()
+        .map_err(err)?;
+    for (j, (name, points)) in series.iter().enumerate() {
+        let colour = Palette99::pick(j).to_rgba();
+        let mut sorted = points.clone();
+        sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+        chart
+            .draw_series(LineSeries::new(
+                sorted.iter().map(|(x, y, _)| (*x, *y)),
+                colour.stroke_width(1),
+            ))
+            .map_err(err)?
+            .label(name.as_str())
+            .legend(move |(x, y)| Circle::new((x + 5, y), 4, colour.filled()));
+        chart
+            .draw_series(sorted.iter().map(|(x, y, label)| {
+                EmptyElement::at((*x, *y))
+                    + Circle::new((0, 0), 4, colour.filled())
+                    + Text::new(label.clone(), (6, -12), ("sans-serif", 11))
+            }))
+            .map_err(err)?;
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::LowerRight)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(err)?;
+    root.present().map_err(err)?;
+    Ok(())
+}

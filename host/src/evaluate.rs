@@ -382,7 +382,7 @@ pub fn load_snapshot(path: &std::path::Path) -> Result<Box<EvalMap>> {
 
 /// The evaluation's ground-truth depth: planar depth, with no-measurement pixels as 0
 /// (kept, as the authors' evaluator keeps depth 0) — only depth >= 20 m is masked.
-fn gt_depth(f: &Frame) -> Vec<f32> {
+pub fn gt_depth(f: &Frame) -> Vec<f32> {
     match f.depth_kind {
         DepthKind::Planar => f
             .depth

@@ -4,6 +4,7 @@
 //! draws it. This crate grows module by module (datasets, reference, evaluation,
 //! baselines, experiments); the core stays `no_std`.
 
+pub mod bki;
 pub mod budget;
 pub mod chart;
 pub mod colors;
@@ -12,6 +13,7 @@ pub mod dataset;
 pub mod demo;
 pub mod eval;
 pub mod evaluate;
+pub mod experiment;
 pub mod export;
 pub mod hypersim;
 pub mod npy;

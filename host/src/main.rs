@@ -34,6 +34,58 @@ enum Command {
     Export(ExportArgs),
     /// Integrate frames into the core and the f64 reference and compare them per cell size.
     Compare(sndt_host::compare::CompareArgs),
+    /// The paper's comparison: S-NDT, S-BKI and OS-BKI per cell size and kernel length;
+    /// Tables I and II (Markdown, CSV), per-class IoU and rate-vs-mIoU charts.
+    Experiment(ExperimentArgs),
+}
+
+/// Which labels an experiment maps with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum ExperimentLabels {
+    Gt,
+    Pred,
+    Both,
+}
+
+#[derive(clap::Args)]
+struct ExperimentArgs {
+    /// Dataset directory (prepared layout or raw Hypersim), or `synthetic[:SCENES:FRAMES]`.
+    dataset: String,
+    /// Labels fed to the maps.
+    #[arg(long, value_enum, default_value = "both")]
+    labels: ExperimentLabels,
+    /// Cell sizes, metres.
+    #[arg(long, value_delimiter = ',', default_value = "0.05,0.1,0.15,0.2")]
+    cells: Vec<f32>,
+    /// Kernel lengths of S-BKI and OS-BKI, metres.
+    #[arg(long, value_delimiter = ',', default_value = "0.1,0.2,0.3,0.4")]
+    kernels: Vec<f32>,
+    /// Methods.
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "sndt,sbki,osbki"
+    )]
+    methods: Vec<sndt_host::experiment::Method>,
+    /// Spacing of BKI free samples along each ray, metres (default: the cell size).
+    #[arg(long)]
+    free_resolution: Option<f32>,
+    /// Use every k-th frame of each trajectory (1 = all, as the paper).
+    #[arg(long, default_value_t = 1)]
+    every: u32,
+    /// Output directory for tables and charts.
+    #[arg(long, default_value = "out/experiment")]
+    out: PathBuf,
+    /// Split of the prepared layout.
+    #[arg(long, default_value = "test")]
+    split: String,
+    /// Use the authors' v0.3.1 fy = 927.06 (prepared layout without intrinsics).
+    #[arg(long)]
+    paper_fy: bool,
+    /// Directory of ESANet `.npy` predictions.
+    #[arg(long)]
+    predictions: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -186,6 +238,7 @@ struct DemoArgs {
 fn main() -> Result<()> {
     match Cli::parse().command {
         Command::Demo(a) => demo(&a),
+        Command::Experiment(a) => experiment(&a),
         Command::Synth(a) => synth(&a),
         Command::Compare(a) => {
             println!("{}", sndt_host::compare::command(&a)?);
@@ -302,6 +355,64 @@ fn synth(a: &SynthArgs) -> Result<()> {
             m.miou * 100.0,
             m.mpacc * 100.0
         );
+    }
+    Ok(())
+}
+
+fn experiment(a: &ExperimentArgs) -> Result<()> {
+    use sndt_host::dataset::{open_spec, Every, LabelSource, OpenOptions};
+    use sndt_host::experiment::{progress_steps, run, ExperimentOptions};
+    let options = OpenOptions {
+        split: Some(a.split.clone()),
+        paper_fy: a.paper_fy,
+        predictions: a.predictions.clone(),
+    };
+    let mut dataset = open_spec(&a.dataset, &options)?;
+    if a.every > 1 {
+        dataset = Box::new(Every::new(dataset, a.every));
+    }
+    println!("sndt experiment: {}", dataset.describe());
+    let labels = match a.labels {
+        ExperimentLabels::Gt => vec![LabelSource::Gt],
+        ExperimentLabels::Pred => vec![LabelSource::Pred],
+        ExperimentLabels::Both => vec![LabelSource::Gt, LabelSource::Pred],
+    };
+    let opts = ExperimentOptions {
+        labels,
+        cells: a.cells.clone(),
+        kernels: a.kernels.clone(),
+        methods: a.methods.clone(),
+        free_resolution: a.free_resolution,
+    };
+    let frames = dataset.frames().len();
+    let bar = progress(progress_steps(&opts, frames), "experiment");
+    let t = Instant::now();
+    let exp = run(dataset.as_ref(), &opts, &|| bar.inc(1))?;
+    bar.finish_and_clear();
+    println!(
+        "{} trajectories, {} frames, {:.0} s\n",
+        dataset.trajectories().len(),
+        exp.frames,
+        t.elapsed().as_secs_f64()
+    );
+    for (l, c) in &exp.inputs {
+        let m = c.metrics();
+        println!(
+            "input labels {l:?} on the frames themselves: mIoU {:.2} %, mPAcc {:.2} %",
+            m.miou * 100.0,
+            m.mpacc * 100.0
+        );
+    }
+    println!(
+        "\nTable I (mIoU / invR / mPAcc, %)\n{}",
+        exp.table1_markdown()
+    );
+    println!(
+        "Table II (map update rate, Hz, single thread; S-BKI and OS-BKI share one map)\n{}",
+        exp.table2_markdown()
+    );
+    for p in exp.write(&a.out)? {
+        println!("wrote {}", p.display());
     }
     Ok(())
 }
