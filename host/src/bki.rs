@@ -215,6 +215,8 @@ pub struct BkiMap {
     /// Per block, counts bin-major (`[bin * 512 + voxel]`): one sample adds to one bin, so
     /// its kernel footprint is contiguous in memory.
     blocks: FxHashMap<[i32; 3], Box<[f32]>>,
+    /// Voxels that held a down-sampled hit in some frame: one bit per voxel, per block.
+    surface: FxHashMap<[i32; 3], [u64; BLOCK_VOXELS / 64]>,
 }
 
 impl BkiMap {
@@ -230,6 +232,7 @@ impl BkiMap {
             config,
             table: KernelTable::new(config.kernel_length, config.sigma0),
             blocks: FxHashMap::default(),
+            surface: FxHashMap::default(),
         })
     }
 
@@ -309,6 +312,17 @@ impl BkiMap {
         let free = free_samples(&origin, &hit_samples, self.config);
         for s in hit_samples.iter().chain(&free) {
             self.add_sample(s);
+        }
+        for s in &hit_samples {
+            let key = s
+                .position
+                .map(|x| (x / self.config.cell_size).floor() as i32);
+            let i = voxel_index(key);
+            let bits = self
+                .surface
+                .entry(key.map(|v| v >> BLOCK_BITS))
+                .or_default();
+            bits[i / 64] |= 1 << (i % 64);
         }
         Ok(BkiReport {
             hits: n_hits,
@@ -402,13 +416,41 @@ impl BkiMap {
     /// The evidence counts of voxel `key` (integer voxel coordinates: voxel `i` spans
     /// `[i, i + 1) cell_size` on each axis), without the prior; `None` if never touched.
     pub fn counts(&self, key: [i32; 3]) -> Option<Counts> {
-        let b = key.map(|v| v >> BLOCK_BITS);
-        let o = key.map(|v| v & (BLOCK_SIDE - 1));
-        let block = self.blocks.get(&b)?;
-        Some(voxel_counts(
-            block,
-            ((o[2] << BLOCK_BITS | o[1]) << BLOCK_BITS | o[0]) as usize,
-        ))
+        let block = self.blocks.get(&key.map(|v| v >> BLOCK_BITS))?;
+        Some(voxel_counts(block, voxel_index(key)))
+    }
+
+    /// How `readout` reads the surface: the voxels that held a down-sampled hit in some
+    /// frame, counted as free (holes), unknown and occupied.
+    ///
+    /// ```
+    /// use sndt_host::bki::{BkiConfig, BkiMap, Readout};
+    /// use sndt_host::dataset::{open_spec, Dataset};
+    /// let data = open_spec("synthetic:1:1", &Default::default()).unwrap();
+    /// let frame = data.load(&data.frames()[0]).unwrap();
+    /// let mut map = BkiMap::new(BkiConfig::new(0.2, 0.3)).unwrap();
+    /// map.integrate(&frame, frame.labels.as_deref()).unwrap();
+    /// let s = map.surface_states(Readout::Osbki);
+    /// assert!(s.voxels > 100 && s.free + s.unknown + s.occupied == s.voxels);
+    /// ```
+    pub fn surface_states(&self, readout: Readout) -> SurfaceStates {
+        let mut out = SurfaceStates::default();
+        for (b, bits) in &self.surface {
+            for i in 0..BLOCK_VOXELS {
+                if bits[i / 64] >> (i % 64) & 1 == 0 {
+                    continue;
+                }
+                let o = [i & 7, (i >> 3) & 7, i >> 6];
+                let key: [i32; 3] = core::array::from_fn(|a| (b[a] << BLOCK_BITS) + o[a] as i32);
+                out.voxels += 1;
+                match self.voxel(key, readout) {
+                    VoxelState::Free => out.free += 1,
+                    VoxelState::Unknown => out.unknown += 1,
+                    VoxelState::Occupied(_) => out.occupied += 1,
+                }
+            }
+        }
+        out
     }
 
     /// The state of voxel `key` as `readout` sees it.
@@ -491,6 +533,26 @@ impl BkiMap {
             cells,
         }
     }
+}
+
+/// Surface voxels of a map and how a read-out sees them ([`BkiMap::surface_states`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SurfaceStates {
+    /// Voxels that held a down-sampled hit.
+    pub voxels: u64,
+    /// Of those, read as free: holes in the surface.
+    pub free: u64,
+    /// Of those, without evidence (kernel shorter than the sample's distance to the
+    /// voxel centre).
+    pub unknown: u64,
+    /// Of those, occupied.
+    pub occupied: u64,
+}
+
+/// Index of voxel `key` within its block.
+fn voxel_index(key: [i32; 3]) -> usize {
+    let o = key.map(|v| v & (BLOCK_SIDE - 1));
+    ((o[2] << BLOCK_BITS | o[1]) << BLOCK_BITS | o[0]) as usize
 }
 
 /// Voxel `i`'s counts out of a bin-major block.

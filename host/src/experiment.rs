@@ -9,7 +9,7 @@
 //! times are single-threaded figures. S-BKI and OS-BKI share one map per kernel length
 //! (their counts are the same, see [`crate::bki`]); the update time is that map's.
 
-use crate::bki::{BkiConfig, BkiMap, Readout};
+use crate::bki::{BkiConfig, BkiMap, Readout, SurfaceStates};
 use crate::dataset::{Dataset, Frame, LabelSource};
 use crate::eval::{Confusion, Metrics};
 use crate::evaluate::{backproject, integrate_frame};
@@ -149,6 +149,9 @@ pub struct Run {
     pub confusion: Confusion,
     /// Per trajectory: name, frames, total update time in seconds.
     pub trajectories: Vec<(String, usize, f64)>,
+    /// S-BKI / OS-BKI: how the final maps read their surface voxels (summed over
+    /// trajectories); zero for S-NDT.
+    pub surface: SurfaceStates,
 }
 
 impl Run {
@@ -261,9 +264,13 @@ pub fn run(
     for p in parts {
         let (name, (runs, inputs, n)) = p?;
         exp.frames += n;
-        for (key, confusion, seconds) in runs {
+        for (key, confusion, seconds, surface) in runs {
             let run = exp.runs.entry(key).or_default();
             run.confusion.merge(&confusion);
+            run.surface.voxels += surface.voxels;
+            run.surface.free += surface.free;
+            run.surface.unknown += surface.unknown;
+            run.surface.occupied += surface.occupied;
             run.trajectories.push((name.clone(), n, seconds));
         }
         for (labels, c) in inputs {
@@ -281,10 +288,10 @@ fn bki_config(options: &ExperimentOptions, cell: f32, kernel: f32) -> BkiConfig 
     c
 }
 
-/// One trajectory's results: per configuration (key, confusion, update seconds), the
-/// input labels' confusion per source, and the frame count.
+/// One trajectory's results: per configuration (key, confusion, update seconds, surface
+/// read-out), the input labels' confusion per source, and the frame count.
 type TrajectoryRuns = (
-    Vec<(RunKey, Confusion, f64)>,
+    Vec<(RunKey, Confusion, f64, SurfaceStates)>,
     Vec<(Labels, Confusion)>,
     usize,
 );
@@ -356,7 +363,7 @@ fn run_trajectory(
                     kernel_mm: 0,
                     cell_mm: mm(cell),
                 };
-                runs.push((key, confusion, seconds));
+                runs.push((key, confusion, seconds, SurfaceStates::default()));
             }
             for &l in &options.kernels {
                 if bki_methods.is_empty() {
@@ -389,7 +396,7 @@ fn run_trajectory(
                         kernel_mm: mm(l),
                         cell_mm: mm(cell),
                     };
-                    runs.push((key, confusion, seconds));
+                    runs.push((key, confusion, seconds, map.surface_states(readout)));
                 }
             }
         }
@@ -465,6 +472,43 @@ impl Experiment {
                     m.invr * 100.0,
                     fmt(m.mpacc, best(|m| m.mpacc))
                 );
+            }
+            s += "\n";
+        }
+        s
+    }
+
+    /// The share of surface voxels (those that held a hit) S-BKI and OS-BKI read as free,
+    /// in %, per cell size: the holes of the paper's Fig. 2, which the back-projection
+    /// only shows as invalid pixels where nothing occupied lies behind them.
+    pub fn holes_markdown(&self) -> String {
+        let cells = self.cells();
+        let mut s = String::from("| labels | method |");
+        for c in &cells {
+            let _ = write!(s, " {}cm |", mm_to_cm(*c));
+        }
+        s += "\n|---|---|";
+        s += &"---:|".repeat(cells.len());
+        s += "\n";
+        for (labels, method, kernel) in self.rows() {
+            if method == Method::Sndt {
+                continue;
+            }
+            let key = |cell_mm| RunKey {
+                labels,
+                method,
+                kernel_mm: kernel,
+                cell_mm,
+            };
+            let _ = write!(s, "| {} | {} |", labels.title(), key(0).row_name());
+            for &cell in &cells {
+                match self.runs.get(&key(cell)) {
+                    Some(r) => {
+                        let v = r.surface.free as f64 / r.surface.voxels.max(1) as f64;
+                        let _ = write!(s, " {:.2} |", v * 100.0);
+                    }
+                    None => s += " |",
+                }
             }
             s += "\n";
         }
@@ -567,7 +611,7 @@ impl Experiment {
         s
     }
 
-    /// Writes table1.md/.csv, table2.md/.csv, results.json, `iou_<labels>.svg` (Fig. 5:
+    /// Writes table1.md/.csv, table2.md/.csv, holes.md, results.json, `iou_<labels>.svg` (Fig. 5:
     /// per-class IoU of S-BKI and OS-BKI at 10 cm with a 30 cm kernel against S-NDT at
     /// 10 and 15 cm, or the nearest configurations run) and `rate_vs_miou_<labels>.svg`.
     pub fn write(&self, out: &Path) -> Result<Vec<PathBuf>> {
@@ -583,6 +627,7 @@ impl Experiment {
         put("table1.csv", &self.table1_csv())?;
         put("table2.md", &self.table2_markdown())?;
         put("table2.csv", &self.table2_csv())?;
+        put("holes.md", &self.holes_markdown())?;
         put(
             "results.json",
             &serde_json::to_string_pretty(&self.to_json())?,
@@ -685,6 +730,9 @@ impl Experiment {
                     "miou": m.miou, "invr": m.invr, "mpacc": m.mpacc,
                     "per_class_iou": iou,
                     "mean_update_ms": r.mean_ms(),
+                    "surface_voxels": r.surface.voxels,
+                    "surface_free": r.surface.free,
+                    "surface_unknown": r.surface.unknown,
                     "trajectories": r.trajectories.iter().map(|(n, f, s)| serde_json::json!({
                         "name": n, "frames": f, "update_s": s })).collect::<Vec<_>>(),
                 })

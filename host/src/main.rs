@@ -411,6 +411,10 @@ fn experiment(a: &ExperimentArgs) -> Result<()> {
         "Table II (map update rate, Hz, single thread; S-BKI and OS-BKI share one map)\n{}",
         exp.table2_markdown()
     );
+    println!(
+        "Surface voxels read as free (holes, %)\n{}",
+        exp.holes_markdown()
+    );
     for p in exp.write(&a.out)? {
         println!("wrote {}", p.display());
     }

@@ -241,6 +241,11 @@ fn alternating_labels_open_holes_in_sbki_but_not_in_osbki() {
     assert_eq!(map.voxel([0, 0, 20], Readout::Sbki), VoxelState::Free);
     let (free, occupied, _) = wall_states(&map, Readout::Osbki);
     assert_eq!((free, occupied), (0, 144), "OS-BKI keeps the whole wall");
+    // The map's own surface statistics see the same: every wall voxel held a hit.
+    let s = map.surface_states(Readout::Sbki);
+    assert!(s.voxels >= 400 && s.free >= 48, "{s:?}");
+    let o = map.surface_states(Readout::Osbki);
+    assert_eq!((o.voxels, o.free, o.unknown), (s.voxels, 0, 0));
     // Labels still come out as one of the two classes where OS-BKI reads them.
     for x in -6..6 {
         match map.voxel([x, 0, 20], Readout::Osbki) {
@@ -463,7 +468,7 @@ fn experiment_sndt_rows_equal_the_evaluation_loop() {
     // Tables and charts.
     let dir = std::env::temp_dir().join(format!("sndt-experiment-{}", std::process::id()));
     let written = exp.write(&dir).unwrap();
-    assert_eq!(written.len(), 5 + 2 * 2);
+    assert_eq!(written.len(), 6 + 2 * 2);
     let t1 = std::fs::read_to_string(dir.join("table1.md")).unwrap();
     assert!(t1.contains("| GT segmentation | S-BKI (20cm) |"));
     assert!(t1.contains("| Predicted segmentation | OS-BKI (40cm) |"));
