@@ -367,7 +367,7 @@ impl Every {
 impl Dataset for Every {
     fn describe(&self) -> String {
         format!(
-            "{} (every {}th frame: {} frames)",
+            "{} (frames 0, {}, ...: {} frames)",
             self.inner.describe(),
             self.step,
             self.frames.len()
