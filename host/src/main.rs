@@ -385,9 +385,23 @@ fn experiment(a: &ExperimentArgs) -> Result<()> {
         free_resolution: a.free_resolution,
     };
     let frames = dataset.frames().len();
-    let bar = progress(progress_steps(&opts, frames), "experiment");
+    let steps = progress_steps(&opts, frames);
+    let bar = progress(steps, "experiment");
     let t = Instant::now();
-    let exp = run(dataset.as_ref(), &opts, &|| bar.inc(1))?;
+    // Long runs in logs (no terminal, bar hidden): a line every 5 %.
+    let done = std::sync::atomic::AtomicU64::new(0);
+    let tick = || {
+        bar.inc(1);
+        let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        if bar.is_hidden() && n * 20 / steps != (n - 1) * 20 / steps {
+            eprintln!(
+                "experiment: {} % after {:.0} s",
+                n * 100 / steps,
+                t.elapsed().as_secs_f64()
+            );
+        }
+    };
+    let exp = run(dataset.as_ref(), &opts, &tick)?;
     bar.finish_and_clear();
     println!(
         "{} trajectories, {} frames, {:.0} s\n",
