@@ -37,6 +37,27 @@ pub struct Metrics {
     pub iou: [Option<f64>; 41],
 }
 
+impl Metrics {
+    /// Per-class IoU keyed by NYU40 class name (classes present in the ground truth).
+    ///
+    /// ```
+    /// let mut c = sndt_host::eval::Confusion::default();
+    /// c.add_frame(&[1, 1], &[1, 2], &[1.0, 1.0]);
+    /// let j = c.metrics().iou_by_name();
+    /// assert_eq!(j["wall"], serde_json::json!(0.5));
+    /// assert!(!j.contains_key("floor"));
+    /// ```
+    pub fn iou_by_name(&self) -> serde_json::Map<String, serde_json::Value> {
+        self.iou
+            .iter()
+            .enumerate()
+            .filter_map(|(c, v)| {
+                v.map(|v| (crate::colors::NYU40[c].to_string(), serde_json::json!(v)))
+            })
+            .collect()
+    }
+}
+
 impl Confusion {
     /// Adds one frame: ground-truth labels (0 void, 1..=40; anything else is treated as
     /// void), predictions (0..=40, anything above 40 counts as invalid) and ground-truth

@@ -113,14 +113,7 @@ impl Evaluation {
     /// The result as JSON (metrics, per-class IoU by name, trajectories).
     pub fn to_json(&self) -> serde_json::Value {
         let m = self.metrics();
-        let per_class: serde_json::Map<String, serde_json::Value> = m
-            .iou
-            .iter()
-            .enumerate()
-            .filter_map(|(c, v)| {
-                v.map(|v| (crate::colors::NYU40[c].to_string(), serde_json::json!(v)))
-            })
-            .collect();
+        let per_class = m.iou_by_name();
         serde_json::json!({
             "miou": m.miou,
             "mpacc": m.mpacc,

@@ -714,14 +714,7 @@ impl Experiment {
             .iter()
             .map(|(k, r)| {
                 let m = r.metrics();
-                let iou: serde_json::Map<String, serde_json::Value> = m
-                    .iou
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(c, v)| {
-                        v.map(|v| (crate::colors::NYU40[c].to_string(), serde_json::json!(v)))
-                    })
-                    .collect();
+                let iou = m.iou_by_name();
                 serde_json::json!({
                     "labels": k.labels.tag(),
                     "method": k.method.name(),
