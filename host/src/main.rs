@@ -77,6 +77,13 @@ struct ExperimentArgs {
     /// Output directory for tables and charts.
     #[arg(long, default_value = "out/experiment")]
     out: PathBuf,
+    #[command(flatten)]
+    open: OpenArgs,
+}
+
+/// How to open a dataset directory (shared by `map` and `experiment`).
+#[derive(clap::Args)]
+struct OpenArgs {
     /// Split of the prepared layout.
     #[arg(long, default_value = "test")]
     split: String,
@@ -86,6 +93,16 @@ struct ExperimentArgs {
     /// Directory of ESANet `.npy` predictions.
     #[arg(long)]
     predictions: Option<PathBuf>,
+}
+
+impl OpenArgs {
+    fn options(&self) -> sndt_host::dataset::OpenOptions {
+        sndt_host::dataset::OpenOptions {
+            split: Some(self.split.clone()),
+            paper_fy: self.paper_fy,
+            predictions: self.predictions.clone(),
+        }
+    }
 }
 
 #[derive(clap::Args)]
@@ -102,15 +119,8 @@ struct MapArgs {
     /// metrics.json and metrics.md.
     #[arg(long, default_value = "out/map")]
     out: PathBuf,
-    /// Split of the prepared layout.
-    #[arg(long, default_value = "test")]
-    split: String,
-    /// Use the authors' v0.3.1 fy = 927.06 (prepared layout without intrinsics).
-    #[arg(long)]
-    paper_fy: bool,
-    /// Directory of ESANet `.npy` predictions.
-    #[arg(long)]
-    predictions: Option<PathBuf>,
+    #[command(flatten)]
+    open: OpenArgs,
     /// Use every stride-th pixel when mapping.
     #[arg(long, default_value_t = 1)]
     stride: u32,
@@ -360,13 +370,9 @@ fn synth(a: &SynthArgs) -> Result<()> {
 }
 
 fn experiment(a: &ExperimentArgs) -> Result<()> {
-    use sndt_host::dataset::{open_spec, Every, LabelSource, OpenOptions};
+    use sndt_host::dataset::{open_spec, Every, LabelSource};
     use sndt_host::experiment::{progress_steps, run, ExperimentOptions};
-    let options = OpenOptions {
-        split: Some(a.split.clone()),
-        paper_fy: a.paper_fy,
-        predictions: a.predictions.clone(),
-    };
+    let options = a.open.options();
     let mut dataset = open_spec(&a.dataset, &options)?;
     if a.every > 1 {
         dataset = Box::new(Every::new(dataset, a.every));
@@ -436,13 +442,9 @@ fn experiment(a: &ExperimentArgs) -> Result<()> {
 }
 
 fn map_command(a: &MapArgs) -> Result<()> {
-    use sndt_host::dataset::{open_spec, OpenOptions};
+    use sndt_host::dataset::open_spec;
     use sndt_host::evaluate::{evaluate, EvalOptions};
-    let options = OpenOptions {
-        split: Some(a.split.clone()),
-        paper_fy: a.paper_fy,
-        predictions: a.predictions.clone(),
-    };
+    let options = a.open.options();
     let dataset = open_spec(&a.dataset, &options)?;
     println!("sndt map: {}", dataset.describe());
     let frames = dataset.frames().len();
@@ -489,13 +491,13 @@ fn map_command(a: &MapArgs) -> Result<()> {
 }
 
 fn export(a: &ExportArgs) -> Result<()> {
-    use sndt_host::dataset::{open_spec, OpenOptions};
+    use sndt_host::dataset::open_spec;
     use sndt_host::evaluate::{integrate_frame, load_snapshot, EvalMap};
     let path = std::path::Path::new(&a.input);
     let map: Box<EvalMap> = if path.is_file() {
         load_snapshot(path)?
     } else {
-        let dataset = open_spec(&a.input, &OpenOptions::default())?;
+        let dataset = open_spec(&a.input, &sndt_host::dataset::OpenOptions::default())?;
         let trajectories = dataset.trajectories();
         let (name, ids) = trajectories
             .first()
