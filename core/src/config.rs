@@ -63,6 +63,26 @@ pub struct Config {
     pub top_k: u8,
     /// Labels whose score (0..=255) is below this do not vote. Default 0.
     pub min_score: u8,
+    /// About how many votes one voxel takes from one frame, in `1..=64`. Default 64.
+    ///
+    /// A 1024x768 frame puts hundreds of points into a near voxel; counting every one
+    /// would let a single frame overwrite the histogram and saturate its `u8` bins (where
+    /// a tie goes to the lower class). So a voxel takes the votes of only one voting point
+    /// in `2^k`: those whose coordinates' hash ([`crate::vote_hash`]) has its top `k` bits
+    /// zero ([`crate::takes_vote`]), a sample with the frame's class proportions that does
+    /// not depend on point order (points at identical coordinates are sampled together).
+    /// `k` is set at the end of each frame from the votes the voxel took
+    /// ([`crate::next_vote_exponent`]) so that a voxel seen as densely in the next frame
+    /// takes between half and all of `votes_per_frame` votes; a new voxel starts with
+    /// `k = 0` (its first frame counts every point). Before a frame's first vote the
+    /// histogram is halved if a bin exceeds `255 - votes_per_frame`, so the sample fits.
+    ///
+    /// Smaller values weigh frames more equally and remember more of them; larger ones
+    /// keep more of each frame and still let a close view (more points) outweigh a
+    /// distant one, whose segmentation is usually worse. On the synthetic split with
+    /// predicted labels at 10 cm (`sndt map synthetic:6:20 --labels pred
+    /// --votes-per-frame N`), larger was better (README "Design decisions").
+    pub votes_per_frame: u8,
     /// Free-space model. Default [`MissModel::NdtOm`].
     pub miss_model: MissModel,
     /// Mahalanobis radius of the ellipsoid a rendering ray must enter. Default 2.5.
@@ -90,6 +110,7 @@ impl Config {
         max_range: 20.0,
         top_k: 1,
         min_score: 0,
+        votes_per_frame: 64,
         miss_model: MissModel::NdtOm,
         render_radius: 2.5,
     };
@@ -143,6 +164,8 @@ impl Config {
             && within(self.max_range, 1e-3, 1e4)
             && self.top_k >= 1
             && self.top_k as usize <= crate::MAX_TOP_K
+            && self.votes_per_frame >= 1
+            && self.votes_per_frame <= 64
             && within(self.render_radius, 0.1, 10.0);
         if ok {
             Ok(())

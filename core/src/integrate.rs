@@ -2,10 +2,13 @@
 //! free space by exact 3-D DDA with NDT-OM misses.
 //!
 //! A frame runs in three phases so its result does not depend on point order:
-//! 1. every point goes into its voxel's integer sums and histogram; the first point of a
-//!    voxel in the frame marks it in its block's `hit` mask and links the block into the
-//!    frame's block list (points beyond max range mark a `far` cell instead);
-//! 2. the block list is sorted by key; each hit voxel decays to `n_max` and gets one hit;
+//! 1. every point goes into its voxel's integer sums, and votes in its histogram if the
+//!    voxel's vote sample takes it (see [`crate::Config::votes_per_frame`]); the first
+//!    point of a voxel in the frame makes room in its histogram, marks it in its block's
+//!    `hit` mask and links the block into the frame's block list (points beyond max range
+//!    mark a `far` cell instead);
+//! 2. the block list is sorted by key; each hit voxel decays to `n_max`, gets one hit and
+//!    sets its vote sampling for the next frame from the votes it took in this one;
 //! 3. one ray per unique end voxel (to the mean of its points, end voxel excluded) and per
 //!    unique truncated end (end included), in sorted order, gives every traversed voxel at
 //!    most one miss.
@@ -16,7 +19,7 @@ use crate::dda::Dda;
 use crate::key::{axis_key, floor_i32, VoxelKey};
 use crate::map::Map;
 use crate::table::{Entry, NIL};
-use crate::voxel::{PrepCache, Prepared, Voxel};
+use crate::voxel::{PrepCache, Prepared, Voxel, EXPONENT_SHIFT, VOTES_TAKEN_MAX};
 use crate::{Error, LabeledPoint, Labels, MAX_FRAME_POINTS, MAX_TOP_K};
 use nalgebra::{Isometry3, Matrix3, Vector3};
 
@@ -230,6 +233,44 @@ impl Run {
     }
 }
 
+impl Frame {
+    /// A sensor-frame point in world coordinates (`f32`, the key convention).
+    #[inline]
+    fn to_world(&self, p: &[f32; 3]) -> [f32; 3] {
+        let m = &self.rot;
+        let mut w = [0.0f32; 3];
+        for (i, wi) in w.iter_mut().enumerate() {
+            *wi = m[(i, 0)] * p[0] + m[(i, 1)] * p[1] + m[(i, 2)] * p[2] + self.origin[i];
+        }
+        w
+    }
+
+    /// The voxel key of a world point and its quantised offset, or `None` outside the key
+    /// range. Works in quanta (`t = w / h * 2^Q`, an exact power-of-two scaling of
+    /// `w / h`): one float-to-int conversion per axis gives both the key
+    /// (`floor(t) >> Q`) and the offset (round half up of `t - 2^Q k - 2^(Q-1)`).
+    #[inline]
+    fn quantise(&self, w: &[f32; 3]) -> Option<(VoxelKey, [i32; 3])> {
+        let mut key_i = [0i32; 3];
+        let mut q = [0i32; 3];
+        for i in 0..3 {
+            let t = w[i] * self.inv_quantum;
+            if !(t >= self.t_min && t < self.t_max) {
+                return None;
+            }
+            let m = floor_i32(t);
+            key_i[i] = m >> self.quant_bits;
+            q[i] = (m & self.quant_mask) - self.qhalf + ((t - m as f32) >= 0.5) as i32;
+        }
+        let key = VoxelKey {
+            x: key_i[0] as i16,
+            y: key_i[1] as i16,
+            z: key_i[2] as i16,
+        };
+        Some((key, q))
+    }
+}
+
 /// Prepared-Gaussian cache of phase 3 (voxel statistics no longer change then).
 type GaussCache = PrepCache<32>;
 
@@ -291,29 +332,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             return Err(Error::FrameTooLarge);
         }
         let mut f = self.begin(pose)?;
-        let (ifx, ify) = (1.0 / cam.fx, 1.0 / cam.fy);
-        for row in (0..h).step_by(stride) {
-            let ry = (row as f32 + 0.5 - cam.cy) * ify;
-            for col in (0..w).step_by(stride) {
-                let i = row * w + col;
-                let d = image.depth[i];
-                if !(d.is_finite() && d > 0.0) {
-                    f.report.rejected_depth += 1;
-                    continue;
-                }
-                let r = [(col as f32 + 0.5 - cam.cx) * ifx, ry, 1.0];
-                let scale = match image.kind {
-                    DepthKind::Planar => d,
-                    DepthKind::Range => d / libm::sqrtf(r[0] * r[0] + r[1] * r[1] + 1.0),
-                };
-                let labels = match image.labels {
-                    LabelImage::None => Labels::NONE,
-                    LabelImage::Top1(l) => Labels::top1(l[i]),
-                    LabelImage::TopK(l) => l[i],
-                };
-                self.add_point(&mut f, [r[0] * scale, r[1] * scale, scale], &labels);
-            }
-        }
+        f.report.rejected_depth += each_pixel(image, |p, l| self.add_point(&mut f, p, &l));
         Ok(self.finish(f))
     }
 
@@ -384,34 +403,14 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             f.report.rejected_label += 1;
             return;
         }
-        let m = &f.rot;
-        let mut w = [0.0f32; 3];
-        for (i, wi) in w.iter_mut().enumerate() {
-            *wi = m[(i, 0)] * p[0] + m[(i, 1)] * p[1] + m[(i, 2)] * p[2] + f.origin[i];
-        }
+        let w = f.to_world(&p);
         if r2 > f.max_range * f.max_range {
             self.add_truncated(f, &w, libm::sqrtf(r2));
             return;
         }
-        // Work in quanta (t = p / h * 2^Q, exact power-of-two scaling of p / h): one
-        // float-to-int conversion per axis gives both the key (floor(t) >> Q) and the
-        // quantised offset (round half up of t - 2^Q k - 2^(Q-1)).
-        let mut key_i = [0i32; 3];
-        let mut q = [0i32; 3];
-        for i in 0..3 {
-            let t = w[i] * f.inv_quantum;
-            if !(t >= f.t_min && t < f.t_max) {
-                f.report.rejected_out_of_range += 1;
-                return;
-            }
-            let m = floor_i32(t);
-            key_i[i] = m >> f.quant_bits;
-            q[i] = (m & f.quant_mask) - f.qhalf + ((t - m as f32) >= 0.5) as i32;
-        }
-        let key = VoxelKey {
-            x: key_i[0] as i16,
-            y: key_i[1] as i16,
-            z: key_i[2] as i16,
+        let Some((key, q)) = f.quantise(&w) else {
+            f.report.rejected_out_of_range += 1;
+            return;
         };
         let packed_block = key.block();
         let bs = if f.block_cache.0 == packed_block {
@@ -447,7 +446,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             let b = &mut self.blocks.slots[bs];
             b.hit |= bit;
             b.surface |= bit;
-            self.voxels.slots[vs].make_vote_room();
+            self.voxels.slots[vs].make_vote_room(self.config.votes_per_frame);
             vs
         } else if f.voxel_cache.0 == packed {
             f.voxel_cache.1
@@ -466,15 +465,29 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         }
         f.voxel_cache = (packed, vs);
         f.run.add(q);
+        let votes = self.has_vote(labels);
         let v = &mut self.voxels.slots[vs];
-        let k = (self.config.top_k as usize).min(n);
-        for i in 0..k {
-            let c = labels.classes[i] as usize;
-            if c >= 1 && labels.scores[i] >= self.config.min_score {
-                v.hist[c - 1] = v.hist[c - 1].saturating_add(1);
+        let exponent = (v.tally >> EXPONENT_SHIFT) as u8;
+        if votes && (exponent == 0 || takes_vote(vote_hash(&p), exponent)) {
+            let taken = (v.tally & VOTES_TAKEN_MAX) + 1;
+            v.tally = (v.tally & !VOTES_TAKEN_MAX) | taken.min(VOTES_TAKEN_MAX);
+            let k = (self.config.top_k as usize).min(n);
+            for i in 0..k {
+                let c = labels.classes[i] as usize;
+                if c >= 1 && labels.scores[i] >= self.config.min_score {
+                    v.hist[c - 1] = v.hist[c - 1].saturating_add(1);
+                }
             }
         }
         f.report.points_used += 1;
+    }
+
+    /// Whether any of a point's (valid) labels votes: one of its first `top_k` labels is a
+    /// class (not void) with a score of at least `min_score`.
+    #[inline]
+    fn has_vote(&self, labels: &Labels) -> bool {
+        let k = (self.config.top_k as usize).min(labels.len as usize);
+        (0..k).any(|i| labels.classes[i] >= 1 && labels.scores[i] >= self.config.min_score)
     }
 
     fn add_truncated(&mut self, f: &mut Frame, w: &[f32; 3], range: f32) {
@@ -569,7 +582,12 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             for cell in bits(b.hit) {
                 let key = VoxelKey::from_block_cell(b.packed_key(), cell);
                 if let Some(vs) = self.voxels.find(key.packed()) {
-                    self.voxels.slots[vs].decay(cfg.n_max);
+                    let v = &mut self.voxels.slots[vs];
+                    v.decay(cfg.n_max);
+                    let exponent = (v.tally >> EXPONENT_SHIFT) as u8;
+                    let taken = v.tally & VOTES_TAKEN_MAX;
+                    let next = next_vote_exponent(exponent, taken, cfg.votes_per_frame);
+                    v.tally = (next as u16) << EXPONENT_SHIFT;
                 }
                 self.blocks.slots[bs].add_logodds(cell, hit, lo, hi);
                 f.report.end_voxels += 1;
@@ -737,6 +755,96 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
 /// units) starting in voxel `start` and ending in `end`, visiting `end` only if
 /// `include_end`. Axis ties step the lowest axis first; at most the Manhattan distance
 /// between the keys plus one voxels are visited.
+/// Calls `visit` with every valid pixel's point (sensor frame) and labels, in row-major
+/// order at the image's stride; returns how many pixels had an invalid depth.
+fn each_pixel(image: &DepthImage<'_>, mut visit: impl FnMut([f32; 3], Labels)) -> u32 {
+    let cam = &image.camera;
+    let stride = image.stride as usize;
+    let (w, h) = (cam.width as usize, cam.height as usize);
+    let (ifx, ify) = (1.0 / cam.fx, 1.0 / cam.fy);
+    let mut invalid = 0;
+    for row in (0..h).step_by(stride) {
+        let ry = (row as f32 + 0.5 - cam.cy) * ify;
+        for col in (0..w).step_by(stride) {
+            let i = row * w + col;
+            let d = image.depth[i];
+            if !(d.is_finite() && d > 0.0) {
+                invalid += 1;
+                continue;
+            }
+            let r = [(col as f32 + 0.5 - cam.cx) * ifx, ry, 1.0];
+            let scale = match image.kind {
+                DepthKind::Planar => d,
+                DepthKind::Range => d / libm::sqrtf(r[0] * r[0] + r[1] * r[1] + 1.0),
+            };
+            let labels = match image.labels {
+                LabelImage::None => Labels::NONE,
+                LabelImage::Top1(l) => Labels::top1(l[i]),
+                LabelImage::TopK(l) => l[i],
+            };
+            visit([r[0] * scale, r[1] * scale, scale], labels);
+        }
+    }
+    invalid
+}
+
+/// The vote-sampling hash of a point (sensor frame): a mix of its coordinates' bits, so
+/// the sample a voxel takes does not depend on point order (see
+/// [`crate::Config::votes_per_frame`]).
+///
+/// ```
+/// let h = sndt_core::vote_hash(&[0.1, -0.2, 1.5]);
+/// assert_eq!(h, sndt_core::vote_hash(&[0.1, -0.2, 1.5]));
+/// assert_ne!(h, sndt_core::vote_hash(&[0.1, -0.2, 1.5001]));
+/// ```
+pub fn vote_hash(p: &[f32; 3]) -> u32 {
+    let mut h = p[0].to_bits().wrapping_mul(0x9e37_79b1);
+    h = (h ^ p[1].to_bits()).wrapping_mul(0x85eb_ca77);
+    h = (h ^ p[2].to_bits()).wrapping_mul(0xc2b2_ae3d);
+    // murmur3's finaliser
+    h ^= h >> 16;
+    h = h.wrapping_mul(0x85eb_ca6b);
+    h ^= h >> 13;
+    h = h.wrapping_mul(0xc2b2_ae35);
+    h ^ (h >> 16)
+}
+
+/// Whether a point with sampling hash `hash` votes in a voxel whose sample keeps one voting
+/// point in `2^exponent` (`exponent <= 15`): the hash's top `exponent` bits are zero.
+///
+/// ```
+/// assert!(sndt_core::takes_vote(u32::MAX, 0));
+/// assert!(sndt_core::takes_vote(0x3fff_ffff, 2) && !sndt_core::takes_vote(0x4000_0000, 2));
+/// ```
+pub fn takes_vote(hash: u32, exponent: u8) -> bool {
+    (hash as u64) >> (32 - exponent.min(MAX_VOTE_EXPONENT) as u32) == 0
+}
+
+/// Largest vote sampling exponent (one point in 32768).
+pub const MAX_VOTE_EXPONENT: u8 = 15;
+
+/// The sampling exponent of a voxel's next frame: the smallest `k` with
+/// `taken * 2^exponent <= votes_per_frame * 2^k` (at most [`MAX_VOTE_EXPONENT`]), where
+/// `taken` votes were sampled at one in `2^exponent` this frame. So a voxel seen about as
+/// densely next frame takes between half and all of `votes_per_frame` votes.
+///
+/// ```
+/// use sndt_core::next_vote_exponent;
+/// assert_eq!(next_vote_exponent(0, 64, 64), 0);
+/// assert_eq!(next_vote_exponent(0, 65, 64), 1);
+/// assert_eq!(next_vote_exponent(2, 100, 64), 3); // about 400 voting points
+/// assert_eq!(next_vote_exponent(5, 0, 64), 0); // no votes taken: count them all
+/// ```
+pub fn next_vote_exponent(exponent: u8, taken: u16, votes_per_frame: u8) -> u8 {
+    let estimate = (taken as u64) << exponent.min(MAX_VOTE_EXPONENT);
+    let budget = votes_per_frame.max(1) as u64;
+    let mut k = 0;
+    while k < MAX_VOTE_EXPONENT && estimate > budget << k {
+        k += 1;
+    }
+    k
+}
+
 fn traverse(
     o: [f32; 3],
     target: [f32; 3],

@@ -72,7 +72,8 @@ mod tests;
 
 pub use config::{Config, MissModel, LOGODDS_ONE};
 pub use integrate::{
-    pose_from_matrix, voxels_on_segment, DepthImage, DepthKind, FrameReport, LabelImage, Pinhole,
+    next_vote_exponent, pose_from_matrix, takes_vote, vote_hash, voxels_on_segment, DepthImage,
+    DepthKind, FrameReport, LabelImage, Pinhole, MAX_VOTE_EXPONENT,
 };
 pub use key::{VoxelKey, KEY_LIMIT};
 pub use map::{Map, MapStats, Occupancy, VoxelView, BLOCK_BYTES, MAP_HEADER_BYTES};

@@ -10,7 +10,7 @@ use crate::voxel::{Gaussian, Voxel};
 pub const BLOCK_BYTES: usize = core::mem::size_of::<Block>();
 
 /// Bytes of the map besides its two tables (config, counters, table bookkeeping).
-pub const MAP_HEADER_BYTES: usize = 124;
+pub const MAP_HEADER_BYTES: usize = 128;
 
 /// Occupancy state of a voxel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -193,6 +193,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             max_range: 0.0,
             top_k: 0,
             min_score: 0,
+            votes_per_frame: 0,
             miss_model: crate::MissModel::NdtOm,
             render_radius: 0.0,
         })

@@ -9,11 +9,11 @@
 //! | 2 | version ([`SNAPSHOT_VERSION`]) |
 //! | 2 | classes `C` |
 //! | 4 + 4 | voxel and block capacity of the writer |
-//! | 60 | config: cell_size, eigen_ratio, hit, miss, clamp_min, clamp_max, lambda, noise_base, noise_quadratic, max_range, render_radius (f32 bits), n_min, n_max (u32), quant_bits, top_k, min_score, miss_model (u8), 4 zero bytes |
+//! | 60 | config: cell_size, eigen_ratio, hit, miss, clamp_min, clamp_max, lambda, noise_base, noise_quadratic, max_range, render_radius (f32 bits), n_min, n_max (u32), quant_bits, top_k, min_score, miss_model, votes_per_frame (u8), 3 zero bytes |
 //! | 4 | frames integrated |
 //! | 4 + 4 | block count, voxel count |
 //! | 142 each | blocks: key (3 x u16, biased by 32768), 64 x i16 log-odds, u64 surface mask |
-//! | 46 + C each | voxels: key (3 x u16), n (u32), S1 (3 x i32), S2 (6 x i32), C x u8 histogram |
+//! | 47 + C each | voxels: key (3 x u16), n (u32), S1 (3 x i32), S2 (6 x i32), vote sampling exponent (u8, <= 15), C x u8 histogram |
 //! | 4 | CRC-32 (IEEE) of everything before |
 //!
 //! Blocks and voxels appear in canonical order (by key hash, then key), so equal maps give
@@ -25,11 +25,12 @@ use crate::crc::{crc32, Crc};
 use crate::key::{order, KEY_LIMIT};
 use crate::map::Map;
 use crate::table::Entry;
-use crate::voxel::{split_key, Voxel};
+use crate::voxel::{split_key, Voxel, EXPONENT_SHIFT};
 use crate::Error;
+use crate::MAX_VOTE_EXPONENT;
 
 /// Snapshot format version written by this build.
-pub const SNAPSHOT_VERSION: u16 = 1;
+pub const SNAPSHOT_VERSION: u16 = 2;
 /// Bytes before the first block record.
 pub const SNAPSHOT_HEADER_BYTES: usize = 88;
 /// Bytes of one block record.
@@ -91,7 +92,7 @@ impl Reader<'_> {
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// Bytes of one voxel record in a snapshot.
-    pub const SNAPSHOT_VOXEL_BYTES: usize = 46 + C;
+    pub const SNAPSHOT_VOXEL_BYTES: usize = 47 + C;
 
     /// Exact length of this map's snapshot.
     pub fn snapshot_len(&self) -> usize {
@@ -195,7 +196,16 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             MissModel::NdtOm => 0u8,
             MissModel::Constant => 1u8,
         };
-        w.put(&[c.quant_bits, c.top_k, c.min_score, model, 0, 0, 0, 0]);
+        w.put(&[
+            c.quant_bits,
+            c.top_k,
+            c.min_score,
+            model,
+            c.votes_per_frame,
+            0,
+            0,
+            0,
+        ]);
         w.put(&self.stats.frames.to_le_bytes());
         w.put(&(self.blocks.len() as u32).to_le_bytes());
         w.put(&(self.voxels.len() as u32).to_le_bytes());
@@ -235,6 +245,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             for x in v.s2.iter_mut() {
                 *x = r.i32();
             }
+            v.tally = (r.u8() as u16) << EXPONENT_SHIFT;
             for x in v.hist.iter_mut() {
                 *x = r.u8();
             }
@@ -277,7 +288,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         c.top_k = r.u8();
         c.min_score = r.u8();
         let model = r.u8();
-        if r.u32() != 0 {
+        c.votes_per_frame = r.u8();
+        if r.take::<3>() != [0; 3] {
             return Err(Error::SnapshotCorrupt); // reserved bytes
         }
         let frames = r.u32();
@@ -377,6 +389,9 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             for x in s2.iter_mut() {
                 *x = r.i32() as i64;
             }
+            if r.u8() > MAX_VOTE_EXPONENT {
+                return Err(Error::SnapshotCorrupt);
+            }
             r.pos += C; // any histogram is valid
             let bound1 = n * qhalf;
             let bound2 = n * qhalf * qhalf;
@@ -453,5 +468,6 @@ fn voxel_record_head<const C: usize>(v: &Voxel<C>, out: &mut [u8; 160]) -> usize
     for x in v.s1.iter().chain(v.s2.iter()) {
         w.put(&x.to_le_bytes());
     }
+    w.put(&[(v.tally >> EXPONENT_SHIFT) as u8]);
     w.pos
 }

@@ -121,8 +121,8 @@ fn sorted3(mut v: [f32; 3]) -> [f32; 3] {
 // ---------------------------------------------------------------------------------------
 
 fn check_size<const V: usize, const B: usize, const C: usize>() {
-    let voxel = (54 + C).div_ceil(4) * 4;
-    let bytes = (124 + V * voxel + B * 184).div_ceil(8) * 8;
+    let voxel = (56 + C).div_ceil(4) * 4;
+    let bytes = (128 + V * voxel + B * 184).div_ceil(8) * 8;
     assert_eq!(Map::<V, B, C>::VOXEL_BYTES, voxel, "VOXEL_BYTES C={C}");
     assert_eq!(
         Map::<V, B, C>::BYTES,
@@ -167,9 +167,9 @@ fn memory_contract_exact_size() {
     assert_eq!(Map::<4096, 1024, 40>::VOXEL_BYTES, 96);
     assert_eq!(Map::<1, 1, 40>::VOXEL_BYTES, 96);
     assert_eq!(BLOCK_BYTES, 184);
-    assert_eq!(MAP_HEADER_BYTES, 124);
+    assert_eq!(MAP_HEADER_BYTES, 128);
     assert_eq!(core::mem::size_of::<Block>(), 184);
-    assert_eq!(Map::<1, 1, 1>::BYTES, 368); // 124 + 56 + 184 = 364 -> 368
+    assert_eq!(Map::<1, 1, 1>::BYTES, 376); // 128 + 60 + 184 = 372 -> 376
 }
 
 // ---------------------------------------------------------------------------------------
@@ -504,17 +504,20 @@ fn decay_through_integrate() {
 // ---------------------------------------------------------------------------------------
 
 #[test]
-fn make_vote_room_halves_only_above_127() {
+fn make_vote_room_halves_only_above_255_minus_votes() {
     let mut v = Voxel::<4>::new(&key(0, 0, 0));
-    v.hist = [127, 3, 0, 1];
-    v.make_vote_room();
-    assert_eq!(v.hist, [127, 3, 0, 1]);
-    v.hist = [128, 3, 0, 1];
-    v.make_vote_room();
-    assert_eq!(v.hist, [64, 1, 0, 0]);
+    v.hist = [191, 3, 0, 1];
+    v.make_vote_room(64);
+    assert_eq!(v.hist, [191, 3, 0, 1]);
+    v.hist = [192, 3, 0, 1];
+    v.make_vote_room(64);
+    assert_eq!(v.hist, [96, 1, 0, 0]);
     v.hist = [5, 255, 200, 7];
-    v.make_vote_room();
+    v.make_vote_room(128);
     assert_eq!(v.hist, [2, 127, 100, 3]);
+    v.hist = [5, 128, 200, 7];
+    v.make_vote_room(1);
+    assert_eq!(v.hist, [5, 128, 200, 7]);
 }
 
 #[test]
@@ -525,30 +528,105 @@ fn argmax_ties_go_to_lower_class() {
     assert_eq!(argmax(&[0, 0, 0]), None);
 }
 
+/// `n1` points of class 1 then `n2` of class 2 at distinct positions inside voxel
+/// (0, 0, 10) of a 10 cm map, drawn from `rng`.
+fn voxel_cloud(rng: &mut Lcg, n1: usize, n2: usize) -> Vec<LabeledPoint> {
+    let mut c = || 0.002 + 0.096 * rng.next() as f32;
+    (0..n1 + n2)
+        .map(|i| lp(c(), c(), 1.0 + c(), if i < n1 { 1 } else { 2 }))
+        .collect()
+}
+
 #[test]
-fn votes_saturate_and_halve_per_frame() {
-    let mut map: Map<16, 16, 2> = Map::new(Config::DEFAULT);
+fn votes_within_the_frame_budget_all_count_and_halve_once_per_frame() {
+    let mut cfg = Config::DEFAULT;
+    cfg.votes_per_frame = 64;
+    let mut map: Map<16, 16, 2> = Map::try_new(cfg).unwrap();
+    let mut rng = Lcg(7);
     let k = key(0, 0, 10);
-    let p = |c| lp(0.05, 0.05, 1.05, c);
-    let frame = |n1: usize, n2: usize| {
-        let mut v = std::vec![p(1); n1];
-        v.extend(std::iter::repeat_n(p(2), n2));
-        v
+    let mut frame = |n1, n2| {
+        let pts = voxel_cloud(&mut rng, n1, n2);
+        map.integrate(&Isometry3::identity(), &pts).unwrap();
+        *map.voxel(&k).unwrap().histogram
     };
-    map.integrate(&Isometry3::identity(), &frame(127, 0))
+    assert_eq!(frame(60, 0), [60, 0]);
+    assert_eq!(frame(0, 10), [60, 10]);
+    assert_eq!(frame(64, 0), [124, 10]);
+    assert_eq!(frame(64, 0), [188, 10]);
+    assert_eq!(frame(4, 0), [192, 10]); // 188 <= 255 - 64: no halving before these votes
+                                        // 192 > 191: halve first (96, 5), then add (10, 10).
+    assert_eq!(frame(10, 10), [106, 15]);
+    assert_eq!(map.class(&k), Some((1, 106.0 / 121.0)));
+}
+
+#[test]
+fn a_crowded_voxel_takes_a_hashed_sample_of_about_votes_per_frame() {
+    let cfg = Config {
+        votes_per_frame: 16,
+        ..Config::DEFAULT
+    };
+    let mut map: Map<16, 16, 2> = Map::try_new(cfg).unwrap();
+    let mut rng = Lcg(3);
+    let k = key(0, 0, 10);
+    // A new voxel counts every point of its first frame: 200 + 300 votes, saturating.
+    map.integrate(&Isometry3::identity(), &voxel_cloud(&mut rng, 200, 300))
         .unwrap();
-    assert_eq!(map.voxel(&k).unwrap().histogram, &[127, 0]);
-    // No bin above 127: no halving.
-    map.integrate(&Isometry3::identity(), &frame(0, 10))
-        .unwrap();
-    assert_eq!(map.voxel(&k).unwrap().histogram, &[127, 10]);
-    map.integrate(&Isometry3::identity(), &frame(1, 0)).unwrap();
-    assert_eq!(map.voxel(&k).unwrap().histogram, &[128, 10]);
-    // 128 > 127: halve first (64, 5), then 200 + 10 votes saturate at 255.
-    map.integrate(&Isometry3::identity(), &frame(200, 10))
-        .unwrap();
-    assert_eq!(map.voxel(&k).unwrap().histogram, &[255, 15]);
-    assert_eq!(map.class(&k), Some((1, 255.0 / 270.0)));
+    assert_eq!(map.voxel(&k).unwrap().histogram, &[200, 255]);
+    // 500 votes taken, 16 per frame: the next frame keeps one point in 2^5 = 32
+    // (500 <= 16 * 32). Room first: 255 > 255 - 16, so halve to (100, 127).
+    assert_eq!(voxel(&map, &k).tally >> 12, 5);
+    let pts = voxel_cloud(&mut rng, 200, 300);
+    map.integrate(&Isometry3::identity(), &pts).unwrap();
+    let taken = |class: u8| {
+        pts.iter()
+            .filter(|p| p.labels.classes[0] == class)
+            .filter(|p| vote_hash(&[p.position.x, p.position.y, p.position.z]) >> 27 == 0)
+            .count()
+    };
+    let (t1, t2) = (taken(1), taken(2));
+    let hist = *map.voxel(&k).unwrap().histogram;
+    assert_eq!(hist, [100 + t1 as u8, 127 + t2 as u8]);
+    assert!(
+        (6..=30).contains(&(t1 + t2)),
+        "about 500 / 32 = 15.6 votes, got {}",
+        t1 + t2
+    );
+    // The next exponent follows the votes taken: about 500 points again.
+    let want = next_vote_exponent(5, (t1 + t2) as u16, 16);
+    assert_eq!(voxel(&map, &k).tally >> 12, want as u16);
+    assert!((4..=6).contains(&want));
+    assert_eq!(map.class(&k).unwrap().0, 2);
+}
+
+#[test]
+fn the_histogram_averages_over_frames() {
+    // Frames of 60 / 40 for class 2, then one frame entirely of class 1: once the voxel's
+    // sampling has adapted, the last frame weighs about as much as any other (about 16
+    // votes), so class 2 stays the argmax.
+    let cfg = Config {
+        votes_per_frame: 16,
+        ..Config::DEFAULT
+    };
+    let mut map: Map<16, 16, 2> = Map::try_new(cfg).unwrap();
+    let mut rng = Lcg(11);
+    let k = key(0, 0, 10);
+    for _ in 0..9 {
+        let pts = voxel_cloud(&mut rng, 200, 300);
+        map.integrate(&Isometry3::identity(), &pts).unwrap();
+    }
+    let before = *map.voxel(&k).unwrap().histogram;
+    assert!(before[1] > before[0], "{before:?}");
+    let pts = voxel_cloud(&mut rng, 500, 0);
+    map.integrate(&Isometry3::identity(), &pts).unwrap();
+    let hist = *map.voxel(&k).unwrap().histogram;
+    // Without halving the gain is the sample; with it, the old votes halved first.
+    let gain = if before.iter().any(|&b| b > 239) {
+        hist[0] as i32 - before[0] as i32 / 2
+    } else {
+        hist[0] as i32 - before[0] as i32
+    };
+    assert!((4..=32).contains(&gain), "{before:?} -> {hist:?}");
+    assert_eq!(map.class(&k).unwrap().0, 2, "{hist:?}");
 }
 
 #[test]
@@ -1414,6 +1492,30 @@ fn snapshot_round_trip_and_rejections() {
     bad[first_voxel + 6..first_voxel + 10].copy_from_slice(&4000u32.to_le_bytes());
     fix_crc(&mut bad);
     assert_eq!(copy.read_snapshot(&bad), Err(Error::SnapshotCorrupt));
+    // So is a vote sampling exponent above 15 (byte 46 of a voxel record).
+    let mut bad = s.clone();
+    bad[first_voxel + 46] = 16;
+    fix_crc(&mut bad);
+    assert_eq!(copy.read_snapshot(&bad), Err(Error::SnapshotCorrupt));
+}
+
+#[test]
+fn snapshot_keeps_the_vote_sampling() {
+    // A crowded voxel samples one point in 2^3 after its first frame (500 votes, 64 per
+    // frame); a map read from its snapshot continues exactly like the original.
+    let mut map: Map<16, 16, 2> = Map::new(Config::DEFAULT);
+    let mut rng = Lcg(5);
+    map.integrate(&Isometry3::identity(), &voxel_cloud(&mut rng, 200, 300))
+        .unwrap();
+    let k = key(0, 0, 10);
+    assert_eq!(voxel(&map, &k).tally >> 12, 3);
+    let mut copy: Map<16, 16, 2> = Map::new(Config::DEFAULT);
+    copy.read_snapshot(&snapshot(&map)).unwrap();
+    assert_eq!(voxel(&copy, &k).tally >> 12, 3);
+    let next = voxel_cloud(&mut rng, 100, 400);
+    map.integrate(&Isometry3::identity(), &next).unwrap();
+    copy.integrate(&Isometry3::identity(), &next).unwrap();
+    assert_eq!(snapshot(&copy), snapshot(&map));
 }
 
 #[test]
@@ -1744,15 +1846,14 @@ mod findings {
         assert!(read.is_err() || var >= 0.0, "accepted; variance {var}");
     }
 
-    /// The 4 reserved bytes of the header are documented as zero but not checked: a
-    /// snapshot with junk there is accepted, and writing the map back gives other bytes.
+    /// The 3 reserved bytes of the header must be zero: junk there is rejected.
     #[test]
-    fn snapshot_accepts_nonzero_reserved_bytes() {
+    fn snapshot_rejects_nonzero_reserved_bytes() {
         let mut map: Map<16, 16, 1> = Map::new(Config::DEFAULT);
         map.integrate(&Isometry3::identity(), &[lp(0.05, 0.05, 1.05, 1); 4])
             .unwrap();
         let mut s = snapshot(&map);
-        s[72] = 0xAB; // reserved bytes 72..76
+        s[73] = 0xAB; // reserved bytes 73..76
         fix_crc(&mut s);
         let mut copy: Map<16, 16, 1> = Map::new(Config::DEFAULT);
         assert_eq!(copy.read_snapshot(&s), Err(Error::SnapshotCorrupt));

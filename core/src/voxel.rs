@@ -26,6 +26,10 @@ pub(crate) struct Voxel<const C: usize> {
     pub(crate) head: u32,
     /// Packed key split in three `u16` (keeps the struct 4-byte aligned).
     pub(crate) key: [u16; 3],
+    /// Vote sampling: bits 12..16 hold the exponent `k` (this frame's sample keeps one
+    /// voting point in `2^k`), bits 0..12 the votes taken this frame (saturating at
+    /// [`VOTES_TAKEN_MAX`]; 0 between frames).
+    pub(crate) tally: u16,
     /// Class votes; bin `i` is class `i + 1`.
     pub(crate) hist: [u8; C],
 }
@@ -38,6 +42,7 @@ impl<const C: usize> Entry for Voxel<C> {
         chain: 0,
         head: 0,
         key: [0; 3],
+        tally: 0,
         hist: [0; C],
     };
     fn packed_key(&self) -> u64 {
@@ -56,6 +61,11 @@ impl<const C: usize> Entry for Voxel<C> {
         self.head = head;
     }
 }
+
+/// Largest count of votes taken in one frame that a tally holds.
+pub(crate) const VOTES_TAKEN_MAX: u16 = 0xfff;
+/// Position of the sampling exponent in a tally.
+pub(crate) const EXPONENT_SHIFT: u32 = 12;
 
 pub(crate) fn split_key(packed: u64) -> [u16; 3] {
     [(packed >> 32) as u16, (packed >> 16) as u16, packed as u16]
@@ -118,10 +128,12 @@ impl<const C: usize> Voxel<C> {
         self.n = m as u32;
     }
 
-    /// Halves every bin if any bin exceeds 127 so the frame's votes have room
-    /// (done once per voxel per frame, so the result does not depend on point order).
-    pub(crate) fn make_vote_room(&mut self) {
-        if self.hist.iter().any(|&b| b > 127) {
+    /// Halves every bin if any bin exceeds `255 - votes` so a frame's sample of about
+    /// `votes` votes has room (done once per voxel per frame, before the votes, so the
+    /// result does not depend on point order).
+    pub(crate) fn make_vote_room(&mut self, votes: u8) {
+        let limit = 255 - votes;
+        if self.hist.iter().any(|&b| b > limit) {
             for b in self.hist.iter_mut() {
                 *b /= 2;
             }

@@ -15,13 +15,13 @@ use sndt_core::{
 };
 
 /// Fixed bytes of a surface voxel before its `C`-byte class histogram (sums, count, key,
-/// hash links); the voxel is `round_up(VOXEL_FIXED_BYTES + C, 4)` bytes
+/// hash links, vote sampling); the voxel is `round_up(VOXEL_FIXED_BYTES + C, 4)` bytes
 /// (`Map::<V, B, C>::VOXEL_BYTES`; tests check the two agree).
-pub const VOXEL_FIXED_BYTES: usize = 54;
+pub const VOXEL_FIXED_BYTES: usize = 56;
 
 /// Fixed bytes of a voxel record in a snapshot before its histogram
 /// (`Map::<V, B, C>::SNAPSHOT_VOXEL_BYTES == SNAPSHOT_VOXEL_FIXED_BYTES + C`).
-pub const SNAPSHOT_VOXEL_FIXED_BYTES: usize = 46;
+pub const SNAPSHOT_VOXEL_FIXED_BYTES: usize = 47;
 
 /// Bytes of one surface voxel with `classes` classes (`Map::<V, B, classes>::VOXEL_BYTES`).
 pub fn voxel_bytes(classes: usize) -> usize {

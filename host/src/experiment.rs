@@ -53,7 +53,7 @@ pub struct ExperimentOptions {
     pub kernels: Vec<f32>,
     /// Methods.
     pub methods: Vec<Method>,
-    /// BKI free-sample spacing, metres; `None`: the cell size (see
+    /// BKI free-sample spacing, metres; `None`: [`BkiConfig::new`]'s 0.3 m (see
     /// [`BkiConfig::free_resolution`]).
     pub free_resolution: Option<f32>,
 }

@@ -68,7 +68,7 @@ struct ExperimentArgs {
         default_value = "sndt,sbki,osbki"
     )]
     methods: Vec<sndt_host::experiment::Method>,
-    /// Spacing of BKI free samples along each ray, metres (default: the cell size).
+    /// Spacing of BKI free samples along each ray, metres (default 0.3).
     #[arg(long)]
     free_resolution: Option<f32>,
     /// Use every k-th frame of each trajectory (1 = all, as the paper).
@@ -124,6 +124,9 @@ struct MapArgs {
     /// Use every stride-th pixel when mapping.
     #[arg(long, default_value_t = 1)]
     stride: u32,
+    /// About how many votes a voxel takes from one frame (1..=64; `Config::votes_per_frame`).
+    #[arg(long, default_value_t = Config::DEFAULT.votes_per_frame)]
+    votes_per_frame: u8,
     /// Also write each trajectory's map snapshot to `<out>/maps/<scene>_<cam>.sndt`.
     #[arg(long)]
     save_maps: bool,
@@ -455,7 +458,13 @@ fn map_command(a: &MapArgs) -> Result<()> {
             out: Some(a.out.clone()),
             stride: a.stride,
             save_maps: a.save_maps.then(|| a.out.join("maps")),
-            ..EvalOptions::new(Config::with_cell_size(a.cell), a.labels)
+            ..EvalOptions::new(
+                Config {
+                    votes_per_frame: a.votes_per_frame,
+                    ..Config::with_cell_size(a.cell)
+                },
+                a.labels,
+            )
         },
         &|| bar.inc(1),
     )?;

@@ -12,12 +12,15 @@
 //!
 //! 1. **points**: each valid point is transformed to the world (in `f32`, the key
 //!    convention) and added to its voxel's `f64` sums `n`, `S1 = sum (p - c)`,
-//!    `S2 = sum (p - c)(p - c)^T` about the voxel centre `c`; its top-k labels are counted
-//!    as this frame's votes. Points beyond `max_range` only mark the voxel of the point
+//!    `S2 = sum (p - c)(p - c)^T` about the voxel centre `c`; its voting labels (top-k,
+//!    score at least `min_score`, not void) count if the voxel's sample takes it. Points beyond `max_range` only mark the voxel of the point
 //!    where their ray is truncated;
 //! 2. **hits**: every voxel that received points gets one hit (`+hit`, clamped), its class
-//!    histogram makes room once (all bins halved, exactly, when one exceeds 127) and takes
-//!    the frame's votes saturating at 255 (README "Design decisions"), and its count and
+//!    histogram makes room once (all bins halved, exactly, when one exceeds
+//!    `255 - votes_per_frame`) and takes the votes of the frame's sample of its voting
+//!    points (those whose [`sndt_core::vote_hash`] passes [`sndt_core::takes_vote`] for
+//!    the voxel's exponent) saturating at 255, then sets its exponent for the next frame
+//!    ([`sndt_core::next_vote_exponent`]), and its count and
 //!    sums are scaled down to the point cap (`n` halved, rounding up, until `n <= n_max`;
 //!    sums scaled by the same factor);
 //! 3. **free space**: one ray per unique end voxel, aimed at the mean of the voxel's points
@@ -109,6 +112,9 @@ pub struct RefVoxel {
     pub s2: Matrix3<f64>,
     /// Class votes; bin `i` is class `i + 1`. Real-valued: halving is exact.
     pub hist: Vec<f64>,
+    /// This frame's vote sample keeps one voting point in `2^vote_exponent`
+    /// (`sndt_core::next_vote_exponent`).
+    pub vote_exponent: u8,
 }
 
 impl RefVoxel {
@@ -118,6 +124,7 @@ impl RefVoxel {
             s1: Vector3::zeros(),
             s2: Matrix3::zeros(),
             hist: vec![0.0; classes],
+            vote_exponent: 0,
         }
     }
 
@@ -127,7 +134,7 @@ impl RefVoxel {
     /// ```
     /// # use sndt_host::reference::RefVoxel;
     /// # use nalgebra::{Matrix3, Vector3};
-    /// let v = RefVoxel { n: 1.0, s1: Vector3::zeros(), s2: Matrix3::zeros(), hist: vec![1.0, 3.0, 3.0, 1.0] };
+    /// let v = RefVoxel { n: 1.0, s1: Vector3::zeros(), s2: Matrix3::zeros(), hist: vec![1.0, 3.0, 3.0, 1.0], vote_exponent: 0 };
     /// assert_eq!(v.class(), Some((2, 0.375)));
     /// ```
     pub fn class(&self) -> Option<(u8, f64)> {
@@ -393,8 +400,9 @@ impl RefMap {
         let classes = self.classes;
         let mut report = RefFrameReport::default();
 
-        // Phase 1: points into sums, votes per end voxel, truncated ends.
-        let mut votes: KeyMap<Vec<u32>> = KeyMap::default();
+        // Phase 1: points into sums, voting points per end voxel, truncated ends.
+        // Per end voxel: this frame's votes per class and the number of points sampled.
+        let mut votes: KeyMap<(Vec<u32>, u32)> = KeyMap::default();
         let mut far = KeySet::default();
         for p in points {
             let s = [p.position.x, p.position.y, p.position.z];
@@ -436,29 +444,40 @@ impl RefMap {
             v.n += 1.0;
             v.s1 += d;
             v.s2 += d * d.transpose();
-            let frame_votes = votes.entry(key).or_insert_with(|| vec![0; classes]);
-            for i in 0..(cfg.top_k as usize).min(nl) {
-                let c = p.labels.classes[i] as usize;
-                if c >= 1 && p.labels.scores[i] >= cfg.min_score {
-                    frame_votes[c - 1] += 1;
-                }
+            // The classes this point votes for, if the voxel's sample takes it.
+            let voted: Vec<usize> = (0..(cfg.top_k as usize).min(nl))
+                .filter(|&i| p.labels.classes[i] >= 1 && p.labels.scores[i] >= cfg.min_score)
+                .map(|i| p.labels.classes[i] as usize)
+                .collect();
+            let exponent = v.vote_exponent;
+            let (frame_votes, taken) = votes.entry(key).or_insert_with(|| (vec![0; classes], 0));
+            if !voted.is_empty() && sndt_core::takes_vote(sndt_core::vote_hash(&s), exponent) {
+                voted.iter().for_each(|&c| frame_votes[c - 1] += 1);
+                *taken += 1;
             }
             report.points_used += 1;
         }
 
         // Phase 2: histogram room + votes, point cap, one hit per end voxel.
         let (lo, hi) = (cfg.clamp_min as f64, cfg.clamp_max as f64);
-        for (key, frame_votes) in &votes {
+        for (key, (frame_votes, taken)) in &votes {
             let v = self
                 .voxels
                 .get_mut(key)
                 .expect("end voxels have statistics");
-            if v.hist.iter().any(|&b| b > 127.0) {
+            if v.hist
+                .iter()
+                .any(|&b| b > 255.0 - cfg.votes_per_frame as f64)
+            {
                 v.hist.iter_mut().for_each(|b| *b *= 0.5);
             }
             for (b, &n) in v.hist.iter_mut().zip(frame_votes) {
                 *b = (*b + n as f64).min(255.0);
             }
+            // The core counts taken votes in 12 bits.
+            let taken = (*taken).min(0xfff) as u16;
+            v.vote_exponent =
+                sndt_core::next_vote_exponent(v.vote_exponent, taken, cfg.votes_per_frame);
             v.decay(cfg.n_max);
             let l = self.cells.entry(*key).or_insert(0.0);
             *l = (*l + cfg.hit as f64).clamp(lo, hi);

@@ -223,7 +223,10 @@ fn alternating_labels_open_holes_in_sbki_but_not_in_osbki() {
     // wall / picture) halves each class's count, and the free samples in front outvote
     // each half: S-BKI's wall turns free. OS-BKI weighs all hits against all free samples
     // first and keeps it occupied.
-    let config = BkiConfig::new(0.1, 0.3);
+    let config = BkiConfig {
+        free_resolution: 0.1,
+        ..BkiConfig::new(0.1, 0.3)
+    };
     let noisy = wall_frame(|x, y| {
         if ((x / 0.1).floor() as i32 + (y / 0.1).floor() as i32) % 2 == 0 {
             1

@@ -208,7 +208,8 @@ fn decay_scales_counts_and_sums_as_documented() {
     }
 }
 
-/// Histogram: top-k voting with a score threshold, void labels, saturation and halving.
+/// Histogram: top-k voting with a score threshold, void labels, votes within the frame
+/// budget, and halving.
 #[test]
 fn class_histogram_by_hand() {
     let mut cfg = Config::DEFAULT;
@@ -233,17 +234,30 @@ fn class_histogram_by_hand() {
     assert_eq!(v.class(), Some((2, 0.5)));
     assert_eq!(v.gaussian.count, 6);
 
-    // Saturation within a frame, halving at the next frame's first vote.
-    let mut map: M = Map::new(Config::DEFAULT);
-    let many: Vec<LabeledPoint> = (0..300)
-        .map(|i| LabeledPoint::new(p, Labels::top1(if i < 280 { 1 } else { 2 })))
-        .collect();
-    map.integrate(&Isometry3::identity(), &many).unwrap();
-    assert_eq!(map.voxel(&key).unwrap().histogram[..2], [255, 20]);
-    let few = [LabeledPoint::new(p, Labels::top1(2)); 10];
-    map.integrate(&Isometry3::identity(), &few).unwrap();
-    assert_eq!(map.voxel(&key).unwrap().histogram[..2], [127, 20]);
-    // No bin above 127 any more: the next frame adds without halving.
-    map.integrate(&Isometry3::identity(), &few).unwrap();
-    assert_eq!(map.voxel(&key).unwrap().histogram[..2], [127, 30]);
+    // Up to `votes_per_frame` voting points per voxel and frame all vote; a bin above
+    // 255 - votes_per_frame halves the histogram once before the next frame's votes.
+    let mut cfg = Config::DEFAULT;
+    cfg.votes_per_frame = 64;
+    let mut map: M = Map::new(cfg);
+    let mut i = 0u32;
+    let mut frame = |n1: u32, n2: u32| {
+        // Distinct points on a 7 x 7 x 7 lattice inside the voxel.
+        let pts: Vec<LabeledPoint> = (0..n1 + n2)
+            .map(|j| {
+                let c = i + j;
+                let at = |d: u32| 0.005 + 0.012 * (d % 7) as f32;
+                let q = Point3::new(at(c), at(c / 7), 1.0 + at(c / 49));
+                LabeledPoint::new(q, Labels::top1(if j < n1 { 1 } else { 2 }))
+            })
+            .collect();
+        i += n1 + n2;
+        map.integrate(&Isometry3::identity(), &pts).unwrap();
+        map.voxel(&key).unwrap().histogram[..2].to_vec()
+    };
+    assert_eq!(frame(60, 4), [60, 4]);
+    assert_eq!(frame(64, 0), [124, 4]);
+    assert_eq!(frame(64, 0), [188, 4]);
+    assert_eq!(frame(0, 10), [188, 14]);
+    assert_eq!(frame(4, 0), [192, 14]); // 188 <= 255 - 64: no halving
+    assert_eq!(frame(0, 10), [96, 17]); // 192 > 191: halved to (96, 7), then + (0, 10)
 }

@@ -216,23 +216,44 @@ fn ndt_om_miss_is_skipped_when_the_gaussian_lies_beyond_the_ray_end() {
 
 #[test]
 fn histogram_halving_by_hand() {
-    let p = [[0.05f32, 0.05, 1.05]];
-    let frames = [(200, 1u8), (10, 2), (300, 3), (1, 1)];
-    let mut r = RefMap::new(Config::DEFAULT, 40);
-    let mut core: Box<SmallMap> = sndt_host::boxed_map(Config::DEFAULT).unwrap();
+    // Distinct points on a 7 x 7 x 7 lattice in voxel (0, 0, 10); at most 64 voting
+    // points per frame, so with `votes_per_frame = 64` every point votes.
+    let lattice = |from: usize, n: usize| -> Vec<[f32; 3]> {
+        let at = |d: usize| 0.005 + 0.012 * (d % 7) as f32;
+        (from..from + n)
+            .map(|c| [at(c), at(c / 7), 1.0 + at(c / 49)])
+            .collect()
+    };
+    let frames = [
+        (60, 1u8),
+        (63, 1),
+        (64, 1),
+        (11, 2),
+        (5, 1),
+        (64, 3),
+        (1, 3),
+    ];
+    let config = Config {
+        votes_per_frame: 64,
+        ..Config::DEFAULT
+    };
+    let mut r = RefMap::new(config, 40);
+    let mut core: Box<SmallMap> = sndt_host::boxed_map(config).unwrap();
+    let mut from = 0;
     for (n, class) in frames {
-        let frame = pts(&vec![p[0]; n], class);
+        let frame = pts(&lattice(from, n), class);
+        from += n;
         r.integrate(&Isometry3::identity(), &frame).unwrap();
         core.integrate(&Isometry3::identity(), &frame).unwrap();
     }
-    // [200] -> halve (200 > 127), + 10 -> [100, 10] -> no halving, + 300 saturating at 255
-    // -> [100, 10, 255] -> halve, + 1 -> [51, 5, 127.5] (the core floors: [51, 5, 127]).
+    // [60] -> [123] -> [187] -> [187, 11] -> [192, 11] -> halve (192 > 255 - 64): [96, 5.5]
+    // (the core floors: [96, 5]), + 64 x class 3 -> [96, 5.5, 64] -> + 1 -> [96, 5.5, 65].
     let v = r.voxel(&[0, 0, 10]).unwrap();
-    assert_eq!(&v.hist[..4], &[51.0, 5.0, 127.5, 0.0]);
-    assert_eq!(v.class(), Some((3, 127.5 / 183.5)));
+    assert_eq!(&v.hist[..4], &[96.0, 5.5, 65.0, 0.0]);
+    assert_eq!(v.class(), Some((1, 96.0 / 166.5)));
     let c = core.voxel(&VoxelKey { x: 0, y: 0, z: 10 }).unwrap();
-    assert_eq!(&c.histogram[..4], &[51, 5, 127, 0]);
-    assert_eq!(c.class().unwrap().0, 3);
+    assert_eq!(&c.histogram[..4], &[96, 5, 65, 0]);
+    assert_eq!(c.class(), Some((1, 96.0 / 166.0)));
 }
 
 /// The tolerances on a fixed synthetic trajectory (living room, 20 frames of
