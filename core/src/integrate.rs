@@ -751,10 +751,6 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 }
 
-/// Exact voxel traversal (Amanatides & Woo) of the segment from `o` to `target` (voxel
-/// units) starting in voxel `start` and ending in `end`, visiting `end` only if
-/// `include_end`. Axis ties step the lowest axis first; at most the Manhattan distance
-/// between the keys plus one voxels are visited.
 /// Calls `visit` with every valid pixel's point (sensor frame) and labels, in row-major
 /// order at the image's stride; returns how many pixels had an invalid depth.
 fn each_pixel(image: &DepthImage<'_>, mut visit: impl FnMut([f32; 3], Labels)) -> u32 {
@@ -845,6 +841,10 @@ pub fn next_vote_exponent(exponent: u8, taken: u16, votes_per_frame: u8) -> u8 {
     k
 }
 
+/// Exact voxel traversal (Amanatides & Woo) of the segment from `o` to `target` (voxel
+/// units) starting in voxel `start` and ending in `end`, visiting `end` only if
+/// `include_end`. Axis ties step the lowest axis first; at most the Manhattan distance
+/// between the keys plus one voxels are visited.
 fn traverse(
     o: [f32; 3],
     target: [f32; 3],

@@ -163,3 +163,36 @@ fn room_frame_is_independent_of_point_order() {
     assert_eq!(snaps[0], snaps[1]);
     assert_eq!(snaps[0], snaps[2]);
 }
+
+/// Crowded voxels sample their votes (`Config::votes_per_frame`): after a dense first frame
+/// the next frames keep one voting point in `2^k`, chosen by coordinates, so three dense
+/// room frames in any order still give the same bytes.
+#[test]
+fn sampled_votes_are_independent_of_point_order() {
+    let cam = camera(256, 192);
+    let poses = sndt_host::room::orbit(12);
+    let config = Config {
+        votes_per_frame: 8,
+        ..Config::DEFAULT
+    };
+    let mut forward = sndt_host::boxed_map::<16384, 8192, 40>(config).unwrap();
+    let mut reversed = sndt_host::boxed_map::<16384, 8192, 40>(config).unwrap();
+    for pose in &poses[..3] {
+        let points = room_frame(pose, &cam);
+        let back: Vec<_> = points.iter().rev().copied().collect();
+        forward.integrate(pose, &points).unwrap();
+        reversed.integrate(pose, &back).unwrap();
+        assert_eq!(snapshot(&*forward), snapshot(&*reversed));
+    }
+    // Sampling did happen: voxels with at most 255 points (so counting them all would
+    // neither saturate nor halve) hold fewer than half as many votes as points (every
+    // point of the room carries a label).
+    let sampled = forward
+        .voxels()
+        .filter(|v| {
+            let votes: u32 = v.histogram.iter().map(|&b| b as u32).sum();
+            votes > 0 && 2 * votes < v.gaussian.count && v.gaussian.count <= 255
+        })
+        .count();
+    assert!(sampled > 10, "{sampled} voxels with sampled votes");
+}
