@@ -56,6 +56,9 @@ pub struct ExperimentOptions {
     /// BKI free-sample spacing, metres; `None`: [`BkiConfig::new`]'s 0.3 m (see
     /// [`BkiConfig::free_resolution`]).
     pub free_resolution: Option<f32>,
+    /// S-NDT votes a voxel takes per frame; `None`: [`Config::DEFAULT`]'s (see
+    /// [`Config::votes_per_frame`]).
+    pub votes_per_frame: Option<u8>,
 }
 
 impl Default for ExperimentOptions {
@@ -68,6 +71,7 @@ impl Default for ExperimentOptions {
             kernels: vec![0.1, 0.2, 0.3, 0.4],
             methods: vec![Method::Sndt, Method::Sbki, Method::Osbki],
             free_resolution: None,
+            votes_per_frame: None,
         }
     }
 }
@@ -240,7 +244,7 @@ pub fn run(
         bail!("S-BKI / OS-BKI need at least one kernel length");
     }
     for &cell in &options.cells {
-        Config::with_cell_size(cell)
+        sndt_config(options, cell)
             .validate()
             .map_err(|e| anyhow!("cell size {cell}: {e:?}"))?;
         for &l in &options.kernels {
@@ -278,6 +282,14 @@ pub fn run(
         }
     }
     Ok(exp)
+}
+
+fn sndt_config(options: &ExperimentOptions, cell: f32) -> Config {
+    let mut c = Config::with_cell_size(cell);
+    if let Some(v) = options.votes_per_frame {
+        c.votes_per_frame = v;
+    }
+    c
 }
 
 fn bki_config(options: &ExperimentOptions, cell: f32, kernel: f32) -> BkiConfig {
@@ -342,7 +354,7 @@ fn run_trajectory(
         inputs.push((labels, input));
         for &cell in &options.cells {
             if options.methods.contains(&Method::Sndt) {
-                let config = Config::with_cell_size(cell);
+                let config = sndt_config(options, cell);
                 let mut map: Box<crate::evaluate::EvalMap> =
                     crate::boxed_map(config).map_err(|e| anyhow!("config: {e:?}"))?;
                 let mut seconds = 0.0;

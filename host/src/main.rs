@@ -71,6 +71,10 @@ struct ExperimentArgs {
     /// Spacing of BKI free samples along each ray, metres (default 0.3).
     #[arg(long)]
     free_resolution: Option<f32>,
+    /// S-NDT: about how many votes a voxel takes from one frame (1..=64; default
+    /// `Config::votes_per_frame`).
+    #[arg(long)]
+    votes_per_frame: Option<u8>,
     /// Use every k-th frame of each trajectory (1 = all, as the paper).
     #[arg(long, default_value_t = 1)]
     every: u32,
@@ -392,6 +396,7 @@ fn experiment(a: &ExperimentArgs) -> Result<()> {
         kernels: a.kernels.clone(),
         methods: a.methods.clone(),
         free_resolution: a.free_resolution,
+        votes_per_frame: a.votes_per_frame,
     };
     let frames = dataset.frames().len();
     let steps = progress_steps(&opts, frames);

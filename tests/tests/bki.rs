@@ -490,3 +490,52 @@ fn experiment_sndt_rows_equal_the_evaluation_loop() {
     };
     assert!(run(data.as_ref(), &bad, &|| {}).is_err());
 }
+
+#[test]
+fn experiment_passes_votes_per_frame_to_the_sndt_maps() {
+    // `--votes-per-frame` must reach S-NDT: the experiment's confusion equals `evaluate`'s
+    // with the same votes, and differs from the default's (4 votes instead of 64 on near
+    // 20 cm voxels that receive hundreds of points per frame).
+    let data = open_spec("synthetic:2:4", &Default::default()).unwrap();
+    let options = ExperimentOptions {
+        labels: vec![LabelSource::Pred],
+        cells: vec![0.2],
+        methods: vec![Method::Sndt],
+        votes_per_frame: Some(4),
+        ..Default::default()
+    };
+    let exp = run(data.as_ref(), &options, &|| {}).unwrap();
+    let evaluate = |votes_per_frame| {
+        let config = Config {
+            votes_per_frame,
+            ..Config::with_cell_size(0.2)
+        };
+        sndt_host::evaluate::evaluate(
+            data.as_ref(),
+            &sndt_host::evaluate::EvalOptions::new(config, LabelSource::Pred),
+            &|| {},
+        )
+        .unwrap()
+        .confusion
+    };
+    let key = RunKey {
+        labels: Labels::Pred,
+        method: Method::Sndt,
+        kernel_mm: 0,
+        cell_mm: 200,
+    };
+    assert_eq!(exp.runs.len(), 1);
+    assert_eq!(exp.runs[&key].confusion, evaluate(4));
+    assert_ne!(
+        exp.runs[&key].confusion,
+        evaluate(Config::DEFAULT.votes_per_frame)
+    );
+    // Out of 1..=64: refused before any mapping.
+    for votes in [0, 65] {
+        let bad = ExperimentOptions {
+            votes_per_frame: Some(votes),
+            ..options.clone()
+        };
+        assert!(run(data.as_ref(), &bad, &|| {}).is_err(), "{votes}");
+    }
+}
