@@ -56,9 +56,9 @@ pub struct ExperimentOptions {
     /// BKI free-sample spacing, metres; `None`: [`BkiConfig::new`]'s 0.3 m (see
     /// [`BkiConfig::free_resolution`]).
     pub free_resolution: Option<f32>,
-    /// S-NDT votes a voxel takes per frame; `None`: [`Config::DEFAULT`]'s (see
-    /// [`Config::votes_per_frame`]).
-    pub votes_per_frame: Option<u8>,
+    /// S-NDT votes a voxel takes per frame ([`Config::votes_per_frame`]; default
+    /// [`Config::DEFAULT`]'s).
+    pub votes_per_frame: u8,
 }
 
 impl Default for ExperimentOptions {
@@ -71,7 +71,7 @@ impl Default for ExperimentOptions {
             kernels: vec![0.1, 0.2, 0.3, 0.4],
             methods: vec![Method::Sndt, Method::Sbki, Method::Osbki],
             free_resolution: None,
-            votes_per_frame: None,
+            votes_per_frame: Config::DEFAULT.votes_per_frame,
         }
     }
 }
@@ -285,11 +285,10 @@ pub fn run(
 }
 
 fn sndt_config(options: &ExperimentOptions, cell: f32) -> Config {
-    let mut c = Config::with_cell_size(cell);
-    if let Some(v) = options.votes_per_frame {
-        c.votes_per_frame = v;
+    Config {
+        votes_per_frame: options.votes_per_frame,
+        ..Config::with_cell_size(cell)
     }
-    c
 }
 
 fn bki_config(options: &ExperimentOptions, cell: f32, kernel: f32) -> BkiConfig {

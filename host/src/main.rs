@@ -71,10 +71,10 @@ struct ExperimentArgs {
     /// Spacing of BKI free samples along each ray, metres (default 0.3).
     #[arg(long)]
     free_resolution: Option<f32>,
-    /// S-NDT: about how many votes a voxel takes from one frame (1..=64; default
+    /// S-NDT: about how many votes a voxel takes from one frame (1..=64;
     /// `Config::votes_per_frame`).
-    #[arg(long)]
-    votes_per_frame: Option<u8>,
+    #[arg(long, default_value_t = Config::DEFAULT.votes_per_frame)]
+    votes_per_frame: u8,
     /// Use every k-th frame of each trajectory (1 = all, as the paper).
     #[arg(long, default_value_t = 1)]
     every: u32,

@@ -501,7 +501,7 @@ fn experiment_passes_votes_per_frame_to_the_sndt_maps() {
         labels: vec![LabelSource::Pred],
         cells: vec![0.2],
         methods: vec![Method::Sndt],
-        votes_per_frame: Some(4),
+        votes_per_frame: 4,
         ..Default::default()
     };
     let exp = run(data.as_ref(), &options, &|| {}).unwrap();
@@ -533,7 +533,7 @@ fn experiment_passes_votes_per_frame_to_the_sndt_maps() {
     // Out of 1..=64: refused before any mapping.
     for votes in [0, 65] {
         let bad = ExperimentOptions {
-            votes_per_frame: Some(votes),
+            votes_per_frame: votes,
             ..options.clone()
         };
         assert!(run(data.as_ref(), &bad, &|| {}).is_err(), "{votes}");
