@@ -7,7 +7,7 @@
 //! with the fraction of pixels that hit something and a checksum of the output.
 
 use sndt_core::{Config, INVALID_LABEL};
-use sndt_host::room::{orbit, Scene, HYPERSIM_CAMERA};
+use sndt_host::dataset::synthetic::room::{orbit, Scene, HYPERSIM_CAMERA};
 use std::time::Instant;
 
 fn main() {
@@ -39,11 +39,12 @@ fn main() {
         "cell", "median ms", "min ms", "max ms", "ns/pixel", "hit %", "checksum"
     );
     for cell in cells {
-        let mut map =
-            sndt_host::boxed_map::<{ 1 << 19 }, { 1 << 17 }, 40>(Config::with_cell_size(cell))
-                .expect("valid config");
+        let mut map = sndt_host::semantic_map::boxed_map::<{ 1 << 19 }, { 1 << 17 }, 40>(
+            Config::with_cell_size(cell),
+        )
+        .expect("valid config");
         for (pose, (depth, labels)) in poses.iter().zip(&frames) {
-            let img = sndt_host::room::depth_image(&cam, depth, labels);
+            let img = sndt_host::dataset::synthetic::room::depth_image(&cam, depth, labels);
             let r = map.integrate_depth(pose, &img).expect("frame integrates");
             assert_eq!(
                 r.dropped_points + r.voxels_evicted,

@@ -5,7 +5,7 @@
 //! first frame (all voxels new) and the steady state are reported separately.
 
 use sndt_core::{Config, Map};
-use sndt_host::room::{orbit, Scene, HYPERSIM_CAMERA};
+use sndt_host::dataset::synthetic::room::{orbit, Scene, HYPERSIM_CAMERA};
 use std::time::Instant;
 
 type BenchMap = Map<{ 1 << 19 }, { 1 << 17 }, 40>;
@@ -25,14 +25,15 @@ fn main() {
         "cell", "first ms", "steady ms", "points/s", "voxels", "blocks", "rays", "MiB map"
     );
     for cell in [0.05f32, 0.10, 0.15, 0.20] {
-        let mut map =
-            sndt_host::boxed_map::<{ 1 << 19 }, { 1 << 17 }, 40>(Config::with_cell_size(cell))
-                .expect("valid config");
+        let mut map = sndt_host::semantic_map::boxed_map::<{ 1 << 19 }, { 1 << 17 }, 40>(
+            Config::with_cell_size(cell),
+        )
+        .expect("valid config");
         let mut times = Vec::new();
         let mut points = 0u64;
         let mut rays = 0u32;
         for (pose, (depth, labels)) in poses.iter().zip(&frames) {
-            let img = sndt_host::room::depth_image(&cam, depth, labels);
+            let img = sndt_host::dataset::synthetic::room::depth_image(&cam, depth, labels);
             let t = Instant::now();
             let r = map.integrate_depth(pose, &img).expect("frame integrates");
             times.push(t.elapsed().as_secs_f64());

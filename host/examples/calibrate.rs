@@ -1,9 +1,9 @@
 //! Calibration of the synthetic segmentation model: prints the raw top-1 mIoU on a subsample
 //! of the default split for the parameters given on the command line.
 //! `cargo run --release -p sndt-host --example calibrate -- [frames] [confuse_easy confuse_med confuse_hard absorb warp blobs]`
+use sndt_host::dataset::synthetic::{add_stats, predict::ModelParams, SynthOptions, Synthetic};
 use sndt_host::dataset::Dataset;
-use sndt_host::eval::Confusion;
-use sndt_host::synth::{add_stats, predict::ModelParams, SynthOptions, Synthetic};
+use sndt_host::eval::metrics::Confusion;
 
 fn main() {
     let a: Vec<f32> = std::env::args()

@@ -154,7 +154,7 @@ pub fn segment_voxels(from: &[f32; 3], to: &[f32; 3], h: f32) -> Option<Vec<Voxe
 /// A pinhole camera of `width x height` pixels with a horizontal field of view of about
 /// 60 degrees (Hypersim's), principal point centred.
 pub fn camera(width: u32, height: u32) -> Pinhole {
-    let f = sndt_host::room::HYPERSIM_CAMERA.fx * width as f32 / 1024.0;
+    let f = sndt_host::dataset::synthetic::room::HYPERSIM_CAMERA.fx * width as f32 / 1024.0;
     Pinhole {
         fx: f,
         fy: f,
@@ -178,9 +178,9 @@ pub fn depth_image<'a>(cam: Pinhole, depth: &'a [f32], labels: &'a [u8]) -> Dept
 
 /// One frame of the box room rendered from `pose`, as labelled points in the sensor frame.
 pub fn room_frame(pose: &Isometry3<f32>, cam: &Pinhole) -> Vec<LabeledPoint> {
-    let room = sndt_host::room::Scene::simple_room();
+    let room = sndt_host::dataset::synthetic::room::Scene::simple_room();
     let (depth, labels) = room.render(pose, cam);
-    sndt_host::room::points(&depth, &labels, cam)
+    sndt_host::dataset::synthetic::room::points(&depth, &labels, cam)
 }
 
 /// A labelled point.

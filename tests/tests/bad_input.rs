@@ -12,8 +12,8 @@ type M = Map<4096, 2048, 40>;
 
 /// A map with one room frame in it.
 fn populated() -> Box<M> {
-    let mut map = sndt_host::boxed_map::<4096, 2048, 40>(Config::DEFAULT).unwrap();
-    let pose = sndt_host::room::orbit(6)[2];
+    let mut map = sndt_host::semantic_map::boxed_map::<4096, 2048, 40>(Config::DEFAULT).unwrap();
+    let pose = sndt_host::dataset::synthetic::room::orbit(6)[2];
     let pts = room_frame(&pose, &camera(32, 24));
     let r = map.integrate(&pose, &pts).unwrap();
     assert_eq!(r.points_used as usize, pts.len());
@@ -69,7 +69,7 @@ fn invalid_depths_are_counted_and_change_nothing() {
     ];
     let depth: Vec<f32> = (0..48).map(|i| bad[i % bad.len()]).collect();
     let labels = vec![1u8; 48];
-    let pose = sndt_host::room::orbit(6)[2];
+    let pose = sndt_host::dataset::synthetic::room::orbit(6)[2];
     let before = content(&map);
     let r = map
         .integrate_depth(&pose, &depth_image(cam, &depth, &labels))
@@ -97,7 +97,7 @@ fn invalid_depths_are_counted_and_change_nothing() {
 #[test]
 fn non_finite_and_zero_points_are_counted_and_change_nothing() {
     let mut map = populated();
-    let pose = sndt_host::room::orbit(6)[2];
+    let pose = sndt_host::dataset::synthetic::room::orbit(6)[2];
     let bad = [
         lp(f32::NAN, 0.0, 1.0, 1),
         lp(0.0, f32::INFINITY, 1.0, 1),
@@ -184,7 +184,7 @@ fn pose_from_matrix_rejects_non_rotations() {
 #[test]
 fn bad_labels_are_counted_and_change_nothing() {
     let mut map = populated();
-    let pose = sndt_host::room::orbit(6)[2];
+    let pose = sndt_host::dataset::synthetic::room::orbit(6)[2];
     let p = Point3::new(0.1, 0.2, 1.5);
     let mut four = Labels::top_k(&[(1, 200), (2, 100), (3, 50)]);
     four.len = 4;
@@ -257,7 +257,7 @@ fn sensor_outside_the_key_range_is_an_error() {
 #[test]
 fn wrong_image_sizes_are_errors() {
     let mut map = populated();
-    let pose = sndt_host::room::orbit(6)[2];
+    let pose = sndt_host::dataset::synthetic::room::orbit(6)[2];
     let cam = camera(8, 6);
     let depth = vec![1.0f32; 48];
     let labels = vec![1u8; 48];
@@ -329,7 +329,7 @@ fn wrong_image_sizes_are_errors() {
 #[test]
 fn oversized_frames_are_errors() {
     let mut map = populated();
-    let pose = sndt_host::room::orbit(6)[2];
+    let pose = sndt_host::dataset::synthetic::room::orbit(6)[2];
     let pts = vec![lp(0.0, 0.0, 1.0, 1); MAX_FRAME_POINTS + 1];
     assert_untouched(&mut map, Error::FrameTooLarge, |m| m.integrate(&pose, &pts));
     let cam = Pinhole {
@@ -562,7 +562,7 @@ fn raycast_with_unbounded_range() {
     let cam = camera(64, 48);
     let depth = vec![2.05f32; 64 * 48];
     let labels = vec![3u8; 64 * 48];
-    let mut map = sndt_host::boxed_map::<1024, 512, 4>(Config::DEFAULT).unwrap();
+    let mut map = sndt_host::semantic_map::boxed_map::<1024, 512, 4>(Config::DEFAULT).unwrap();
     map.integrate_depth(&Isometry3::identity(), &depth_image(cam, &depth, &labels))
         .unwrap();
     let o = Point3::new(0.05, 0.05, 0.0);

@@ -4,11 +4,12 @@
 //! bad input, and `sndt experiment`'s S-NDT rows against the evaluation loop.
 
 use sndt_core::{Config, DepthKind, Isometry3, Pinhole, Translation3, UnitQuaternion};
-use sndt_host::bki::{
+use sndt_host::baselines::bki::{
     kernel, BkiConfig, BkiMap, Readout, Sample, VoxelState, FREE, INVALID, UNCLASSIFIED,
 };
-use sndt_host::dataset::{open_spec, Frame, FrameId, LabelSource, Rays};
-use sndt_host::experiment::{run, ExperimentOptions, Labels, Method, RunKey};
+use sndt_host::dataset::open_spec;
+use sndt_host::dataset::{Frame, FrameId, LabelSource, Rays};
+use sndt_host::eval::experiment::{run, ExperimentOptions, Labels, Method, RunKey};
 use std::sync::Arc;
 
 /// Reference values: sigma0 [ (2 + cos 2 pi r)(1 - r) / 3 + sin(2 pi r) / (2 pi) ],
@@ -422,9 +423,9 @@ fn experiment_sndt_rows_equal_the_evaluation_loop() {
         (Labels::Gt, LabelSource::Gt),
         (Labels::Pred, LabelSource::Pred),
     ] {
-        let eval = sndt_host::evaluate::evaluate(
+        let eval = sndt_host::eval::evaluate::evaluate(
             data.as_ref(),
-            &sndt_host::evaluate::EvalOptions::new(Config::with_cell_size(0.2), source),
+            &sndt_host::eval::evaluate::EvalOptions::new(Config::with_cell_size(0.2), source),
             &|| {},
         )
         .unwrap();
@@ -510,9 +511,9 @@ fn experiment_passes_votes_per_frame_to_the_sndt_maps() {
             votes_per_frame,
             ..Config::with_cell_size(0.2)
         };
-        sndt_host::evaluate::evaluate(
+        sndt_host::eval::evaluate::evaluate(
             data.as_ref(),
-            &sndt_host::evaluate::EvalOptions::new(config, LabelSource::Pred),
+            &sndt_host::eval::evaluate::EvalOptions::new(config, LabelSource::Pred),
             &|| {},
         )
         .unwrap()

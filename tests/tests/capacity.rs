@@ -74,7 +74,7 @@ fn step(map: &mut Tiny, totals: &mut Totals, pose: &Isometry3<f32>, points: &[La
     }
     // The map stays internally consistent: its snapshot passes every read check.
     let snap = snapshot(map);
-    let mut copy: Box<Tiny> = sndt_host::boxed_map(*map.config()).unwrap();
+    let mut copy: Box<Tiny> = sndt_host::semantic_map::boxed_map(*map.config()).unwrap();
     copy.read_snapshot(&snap).unwrap();
     assert_eq!(copy.checksum(), map.checksum());
 }
@@ -85,7 +85,7 @@ fn room_orbit_never_exceeds_capacity() {
     let mut totals = Totals::default();
     let cam = camera(32, 24);
     let mut points_total = 0;
-    for pose in sndt_host::room::orbit(24) {
+    for pose in sndt_host::dataset::synthetic::room::orbit(24) {
         let mut points = room_frame(&pose, &cam);
         // Room labels are NYU40 ids; keep a few above CLASSES (rejected and counted).
         for (i, p) in points.iter_mut().enumerate() {

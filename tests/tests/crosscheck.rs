@@ -3,7 +3,7 @@
 //! x86-64 (`cargo test`) and on aarch64 under qemu-aarch64 (`scripts/aarch64.sh`); the
 //! Cortex-M4F firmware checks the same CRC in QEMU (`scripts/firmware.sh`).
 
-use sndt_host::testvector::{expected_crc, generate, parse_crc, TestVector};
+use sndt_host::embedded::testvector::{expected_crc, generate, parse_crc, TestVector};
 use std::path::PathBuf;
 
 fn vector_dir() -> PathBuf {

@@ -3,11 +3,11 @@
 //! snapshots for `sndt export`.
 
 use sndt_core::{Config, Pinhole};
+use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
 use sndt_host::dataset::{Dataset, Frame, LabelSource, Rays};
-use sndt_host::evaluate::{
+use sndt_host::eval::evaluate::{
     backproject, evaluate, integrate_frame, load_snapshot, save_snapshot, EvalMap, EvalOptions,
 };
-use sndt_host::synth::{SynthOptions, Synthetic};
 use std::sync::Arc;
 
 const CAM: Pinhole = Pinhole {
@@ -139,7 +139,8 @@ fn predicted_labels_make_worse_maps_than_ground_truth() {
 #[test]
 fn per_pixel_rays_backproject_like_the_pinhole() {
     let data = split(4);
-    let mut map: Box<EvalMap> = sndt_host::boxed_map(Config::with_cell_size(0.1)).unwrap();
+    let mut map: Box<EvalMap> =
+        sndt_host::semantic_map::boxed_map(Config::with_cell_size(0.1)).unwrap();
     let ids: Vec<_> = data.trajectories()[0].1.clone();
     for id in &ids {
         integrate_frame(map.as_mut(), &data.load(id).unwrap(), LabelSource::Gt, 1).unwrap();
@@ -171,7 +172,8 @@ fn per_pixel_rays_backproject_like_the_pinhole() {
 #[test]
 fn snapshots_round_trip_through_files() {
     let data = split(3);
-    let mut map: Box<EvalMap> = sndt_host::boxed_map(Config::with_cell_size(0.15)).unwrap();
+    let mut map: Box<EvalMap> =
+        sndt_host::semantic_map::boxed_map(Config::with_cell_size(0.15)).unwrap();
     for id in &data.trajectories()[1].1 {
         integrate_frame(map.as_mut(), &data.load(id).unwrap(), LabelSource::Gt, 2).unwrap();
     }

@@ -5,8 +5,10 @@
 //! files independently of this crate's HDF5 reader.
 
 use sndt_core::{DepthKind, Matrix3, Vector3};
-use sndt_host::dataset::{self, Dataset, Frame, FrameId, OpenOptions, Rays};
-use sndt_host::hypersim::{self, Hypersim};
+use sndt_host::dataset;
+use sndt_host::dataset::hypersim::{self, Hypersim};
+use sndt_host::dataset::OpenOptions;
+use sndt_host::dataset::{Dataset, Frame, FrameId, Rays};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -233,7 +235,7 @@ fn fixture_frame_zero_floor_is_a_horizontal_plane() {
 
     // The same pixels through the nominal pinhole: the floor tilts by ~5 degrees and
     // sinks by ~0.4 m, because ai_037_002 is a tilt-shift camera.
-    let nominal = sndt_host::room::HYPERSIM_CAMERA;
+    let nominal = sndt_host::dataset::synthetic::room::HYPERSIM_CAMERA;
     let pin = Frame {
         rays: Arc::new(Rays::Pinhole(nominal)),
         ..f.clone()
@@ -470,7 +472,7 @@ fn esanet_predictions_beside_the_raw_fixture() {
     };
     let path = dir.join(SCENE).join(CAM).join("0000.npy");
     std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-    sndt_host::npy::write_topk(&path, &topk, w as u32, h as u32).unwrap();
+    sndt_host::dataset::npy::write_topk(&path, &topk, w as u32, h as u32).unwrap();
     let options = OpenOptions {
         predictions: Some(dir.clone()),
         ..OpenOptions::default()

@@ -114,8 +114,8 @@ proptest! {
 
     #[test]
     fn frame_is_independent_of_point_order(cfg in config(), a in frame(), b in frame()) {
-        let mut m1 = sndt_host::boxed_map::<4096, 4096, CLASSES>(cfg).unwrap();
-        let mut m2 = sndt_host::boxed_map::<4096, 4096, CLASSES>(cfg).unwrap();
+        let mut m1 = sndt_host::semantic_map::boxed_map::<4096, 4096, CLASSES>(cfg).unwrap();
+        let mut m2 = sndt_host::semantic_map::boxed_map::<4096, 4096, CLASSES>(cfg).unwrap();
 
         let r1 = run(&mut m1, &a, false);
         let r2 = run(&mut m2, &a, true);
@@ -139,7 +139,7 @@ proptest! {
 #[test]
 fn room_frame_is_independent_of_point_order() {
     let cam = camera(96, 72);
-    let pose = sndt_host::room::orbit(8)[3];
+    let pose = sndt_host::dataset::synthetic::room::orbit(8)[3];
     let points = room_frame(&pose, &cam);
     assert!(points.len() > 5000);
     let reversed: Vec<_> = points.iter().rev().copied().collect();
@@ -151,7 +151,8 @@ fn room_frame_is_independent_of_point_order() {
         .collect();
     let mut snaps = Vec::new();
     for pts in [&points, &reversed, &interleaved] {
-        let mut map = sndt_host::boxed_map::<8192, 8192, 40>(Config::DEFAULT).unwrap();
+        let mut map =
+            sndt_host::semantic_map::boxed_map::<8192, 8192, 40>(Config::DEFAULT).unwrap();
         let r = map.integrate(&pose, pts).unwrap();
         assert_eq!(
             (r.voxels_evicted, r.blocks_evicted, r.dropped_points),
@@ -170,13 +171,13 @@ fn room_frame_is_independent_of_point_order() {
 #[test]
 fn sampled_votes_are_independent_of_point_order() {
     let cam = camera(256, 192);
-    let poses = sndt_host::room::orbit(12);
+    let poses = sndt_host::dataset::synthetic::room::orbit(12);
     let config = Config {
         votes_per_frame: 8,
         ..Config::DEFAULT
     };
-    let mut forward = sndt_host::boxed_map::<16384, 8192, 40>(config).unwrap();
-    let mut reversed = sndt_host::boxed_map::<16384, 8192, 40>(config).unwrap();
+    let mut forward = sndt_host::semantic_map::boxed_map::<16384, 8192, 40>(config).unwrap();
+    let mut reversed = sndt_host::semantic_map::boxed_map::<16384, 8192, 40>(config).unwrap();
     for pose in &poses[..3] {
         let points = room_frame(pose, &cam);
         let back: Vec<_> = points.iter().rev().copied().collect();

@@ -3,8 +3,11 @@
 //! PLY output.
 
 use sndt_core::{DepthKind, Isometry3, Pinhole, Translation3, UnitQuaternion, Vector3};
-use sndt_host::dataset::{self, Dataset, Frame, FrameId, OpenOptions, Rays, TopK};
-use sndt_host::{npy, ply, prepared};
+use sndt_host::dataset;
+use sndt_host::dataset::OpenOptions;
+use sndt_host::dataset::{npy, prepared};
+use sndt_host::dataset::{Dataset, Frame, FrameId, Rays, TopK};
+use sndt_host::output::ply;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 

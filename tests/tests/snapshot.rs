@@ -37,9 +37,9 @@ fn fix_crc(buf: &mut [u8]) {
 /// A small map with a bit of everything: two room frames (surface voxels, free space,
 /// several classes), classes folded into 1..=8.
 fn build(frames: &[usize], model: MissModel) -> Box<Small> {
-    let mut map = sndt_host::boxed_map::<512, 128, C>(config_with(model)).unwrap();
+    let mut map = sndt_host::semantic_map::boxed_map::<512, 128, C>(config_with(model)).unwrap();
     let cam = camera(16, 12);
-    let poses = sndt_host::room::orbit(8);
+    let poses = sndt_host::dataset::synthetic::room::orbit(8);
     for &i in frames {
         let mut pts = room_frame(&poses[i], &cam);
         for p in pts.iter_mut() {
@@ -65,7 +65,7 @@ fn fixtures() -> &'static (Vec<u8>, Vec<u8>) {
 
 /// A map holding the second fixture.
 fn target() -> Box<Small> {
-    let mut t = sndt_host::boxed_map::<512, 128, C>(Config::DEFAULT).unwrap();
+    let mut t = sndt_host::semantic_map::boxed_map::<512, 128, C>(Config::DEFAULT).unwrap();
     t.read_snapshot(&fixtures().1).unwrap();
     t
 }
@@ -91,7 +91,8 @@ fn round_trip_is_byte_identical() {
             + map.len() * Small::SNAPSHOT_VOXEL_BYTES
             + 4
     );
-    let mut copy = sndt_host::boxed_map::<512, 128, C>(Config::with_cell_size(0.3)).unwrap();
+    let mut copy =
+        sndt_host::semantic_map::boxed_map::<512, 128, C>(Config::with_cell_size(0.3)).unwrap();
     copy.read_snapshot(&snap).unwrap();
     assert_eq!(snapshot(&*copy), snap);
     assert_eq!(copy.checksum(), map.checksum());
@@ -105,7 +106,7 @@ fn round_trip_is_byte_identical() {
     }
     // The copy keeps integrating exactly like the original.
     let mut original = map;
-    let pose = sndt_host::room::orbit(8)[4];
+    let pose = sndt_host::dataset::synthetic::room::orbit(8)[4];
     let pts = room_frame(&pose, &camera(16, 12));
     let pts: Vec<_> = pts
         .into_iter()
@@ -121,7 +122,7 @@ fn round_trip_is_byte_identical() {
     assert_eq!(snapshot(&*original), snapshot(&*copy));
 
     // Into a map with more capacity: same content (only the capacity fields differ).
-    let mut big = sndt_host::boxed_map::<1024, 512, C>(Config::DEFAULT).unwrap();
+    let mut big = sndt_host::semantic_map::boxed_map::<1024, 512, C>(Config::DEFAULT).unwrap();
     big.read_snapshot(&snap).unwrap();
     let again = snapshot(&*big);
     assert_eq!(again.len(), snap.len());
@@ -342,7 +343,7 @@ fn decayed_wall_snapshot_reads_back() {
     let cam = camera(64, 48);
     let depth = vec![2.03f32; 64 * 48];
     let labels = vec![1u8; 64 * 48];
-    let mut map = sndt_host::boxed_map::<4096, 1024, C>(cfg).unwrap();
+    let mut map = sndt_host::semantic_map::boxed_map::<4096, 1024, C>(cfg).unwrap();
     for i in 0..12 {
         // Small sideways steps so the points differ from frame to frame.
         let pose = Isometry3::translation(0.0037 * i as f32, -0.0023 * i as f32, 0.0);
@@ -354,7 +355,7 @@ fn decayed_wall_snapshot_reads_back() {
         "no voxel decayed"
     );
     let snap = snapshot(&*map);
-    let mut copy = sndt_host::boxed_map::<4096, 1024, C>(Config::DEFAULT).unwrap();
+    let mut copy = sndt_host::semantic_map::boxed_map::<4096, 1024, C>(Config::DEFAULT).unwrap();
     assert_eq!(copy.read_snapshot(&snap), Ok(()));
     assert_eq!(snapshot(&*copy), snap);
 }

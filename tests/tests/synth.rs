@@ -3,12 +3,16 @@
 //! trip through the prepared layout.
 
 use sndt_core::{Isometry3, Pinhole, Point3, Vector3};
-use sndt_host::dataset::{self, Dataset, FrameId, OpenOptions};
-use sndt_host::eval::Confusion;
-use sndt_host::room::look_at;
-use sndt_host::synth::geometry::{Bvh, Primitive};
-use sndt_host::synth::scenes::{SceneKind, SynthScene};
-use sndt_host::synth::{self, render, trajectory, DepthNoise, SynthOptions, Synthetic};
+use sndt_host::dataset;
+use sndt_host::dataset::synthetic::geometry::{Bvh, Primitive};
+use sndt_host::dataset::synthetic::room::look_at;
+use sndt_host::dataset::synthetic::scenes::{SceneKind, SynthScene};
+use sndt_host::dataset::synthetic::{
+    self, render, trajectory, DepthNoise, SynthOptions, Synthetic,
+};
+use sndt_host::dataset::OpenOptions;
+use sndt_host::dataset::{Dataset, FrameId};
+use sndt_host::eval::metrics::Confusion;
 
 const SMALL: Pinhole = Pinhole {
     fx: 60.0,
@@ -147,7 +151,7 @@ fn render_agrees_with_analytic_plane_intersections() {
 #[test]
 fn trajectories_walk_at_person_height_in_free_space() {
     for i in [0, 2, 5] {
-        let scene = SynthScene::generate(i, synth::DEFAULT_SEED);
+        let scene = SynthScene::generate(i, synthetic::DEFAULT_SEED);
         let poses = trajectory(&scene, 100, 77);
         assert_eq!(poses.len(), 100);
         let mut moved = 0.0;
@@ -200,7 +204,7 @@ fn default_split_covers_25_classes_and_prediction_is_calibrated() {
     let mut conf = Confusion::default();
     for id in split.frames().iter().filter(|id| id.index % 10 == 0) {
         let f = split.load(id).unwrap();
-        synth::add_stats(&f, &mut hist, &mut conf);
+        synthetic::add_stats(&f, &mut hist, &mut conf);
     }
     let present = hist[1..].iter().filter(|&&n| n > 0).count();
     assert!(present >= 25, "{present} classes in view");
@@ -268,7 +272,7 @@ fn written_split_reads_back_identically() {
         ..Default::default()
     })
     .unwrap();
-    let summary = synth::write_split(&dir, &split, &|| {}).unwrap();
+    let summary = synthetic::write_split(&dir, &split, &|| {}).unwrap();
     assert_eq!(summary.frames, 4);
     assert_eq!(summary.class_pixels.iter().sum::<u64>(), 4 * 80 * 60);
     let read = dataset::open(&dir, &OpenOptions::default()).unwrap();

@@ -20,7 +20,10 @@
 //! slightly off; NaN, infinite or badly non-orthonormal poses are errors naming the file
 //! and the keyframe.
 
-use crate::dataset::{Dataset, Frame, FrameId, OpenOptions, Rays};
+use crate::dataset::frame::{Frame, FrameId, Rays};
+
+use crate::dataset::source::Dataset;
+use crate::dataset::source::OpenOptions;
 use anyhow::{anyhow, bail, ensure, Context, Result};
 use sndt_core::{DepthKind, Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
 use std::collections::{BTreeMap, HashMap};
@@ -312,7 +315,7 @@ impl Dataset for Hypersim {
             depth_kind: DepthKind::Range,
             labels,
             predictions: match &self.predictions {
-                Some(dir) => Some(crate::npy::read_topk(
+                Some(dir) => Some(crate::dataset::npy::read_topk(
                     &dir.join(&id.scene)
                         .join(&id.cam)
                         .join(format!("{}.npy", id.stem())),

@@ -12,10 +12,10 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::f32::consts::{FRAC_PI_2, PI};
 
-/// NYU40 ids used here beyond those in [`crate::room::nyu`].
+/// NYU40 ids used here beyond those in [`crate::dataset::synthetic::room::nyu`].
 #[allow(missing_docs)]
 pub mod class {
-    pub use crate::room::nyu::*;
+    pub use crate::dataset::synthetic::room::nyu::*;
     pub const CABINET: u8 = 3;
     pub const CHAIR: u8 = 5;
     pub const SOFA: u8 = 6;
@@ -113,7 +113,7 @@ impl SynthScene {
     /// through [`SceneKind::ALL`].
     ///
     /// ```
-    /// let s = sndt_host::synth::scenes::SynthScene::generate(0, 42);
+    /// let s = sndt_host::dataset::synthetic::scenes::SynthScene::generate(0, 42);
     /// assert_eq!(s.name, "synth_00_living");
     /// assert!(s.bvh.primitives().len() > 30);
     /// ```

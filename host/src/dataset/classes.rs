@@ -49,7 +49,7 @@ pub const NYU40: [&str; 41] = [
 /// and so on.
 ///
 /// ```
-/// use sndt_host::colors::color;
+/// use sndt_host::dataset::classes::color;
 /// assert_eq!(color(0), [0, 0, 0]);
 /// assert_eq!(color(1), [128, 0, 0]);
 /// assert_eq!(color(2), [0, 128, 0]);

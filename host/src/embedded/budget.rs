@@ -3,12 +3,12 @@
 //! evictions of a trajectory at such a capacity, so a firmware author can pick `V` and `B`.
 //!
 //! ```
-//! use sndt_host::budget::map_bytes;
+//! use sndt_host::embedded::budget::map_bytes;
 //! // The firmware's map: 4096 surface voxels, 512 blocks, 40 classes.
 //! assert_eq!(map_bytes(4096, 512, 40), sndt_core::Map::<4096, 512, 40>::BYTES);
 //! ```
 
-use crate::dataset::{Frame, LabelSource};
+use crate::dataset::frame::{Frame, LabelSource};
 use anyhow::{bail, Result};
 use sndt_core::{
     Config, Map, BLOCK_BYTES, MAP_HEADER_BYTES, SNAPSHOT_BLOCK_BYTES, SNAPSHOT_HEADER_BYTES,
@@ -94,8 +94,8 @@ pub const CAPACITIES: [(usize, usize); 5] = [
 /// The smallest compiled capacity with at least `voxels` voxels and `blocks` blocks.
 ///
 /// ```
-/// assert_eq!(sndt_host::budget::pick_capacity(5000, 100), Some((16384, 2048)));
-/// assert_eq!(sndt_host::budget::pick_capacity(4096, 512), Some((4096, 512)));
+/// assert_eq!(sndt_host::embedded::budget::pick_capacity(5000, 100), Some((16384, 2048)));
+/// assert_eq!(sndt_host::embedded::budget::pick_capacity(4096, 512), Some((4096, 512)));
 /// ```
 pub fn pick_capacity(voxels: usize, blocks: usize) -> Option<(usize, usize)> {
     CAPACITIES
@@ -127,7 +127,7 @@ fn simulate_with<const V: usize, const B: usize>(
     stride: u32,
 ) -> Result<TrajectoryBudget> {
     let mut map: Box<Map<V, B, 40>> =
-        crate::boxed_map(config).map_err(|e| anyhow::anyhow!("config: {e:?}"))?;
+        crate::semantic_map::boxed_map(config).map_err(|e| anyhow::anyhow!("config: {e:?}"))?;
     let mut out = TrajectoryBudget::default();
     for frame in frames {
         let frame = frame?;
@@ -150,8 +150,8 @@ fn simulate_with<const V: usize, const B: usize>(
 /// returns the peak occupancy and evictions.
 ///
 /// ```
-/// use sndt_host::budget::simulate;
-/// let frames = sndt_host::budget::room_frames(2, 64, 48);
+/// use sndt_host::embedded::budget::simulate;
+/// let frames = sndt_host::embedded::budget::room_frames(2, 64, 48);
 /// let b = simulate(frames.into_iter().map(Ok), sndt_core::Config::DEFAULT, (4096, 512), 1).unwrap();
 /// assert_eq!(b.frames, 2);
 /// assert!(b.peak_voxels > 0 && b.peak_voxels <= 4096);
@@ -175,7 +175,7 @@ pub fn simulate(
 
 /// Runs [`simulate`] on every trajectory of a dataset; returns `(trajectory, budget)`.
 pub fn simulate_dataset(
-    dataset: &dyn crate::dataset::Dataset,
+    dataset: &dyn crate::dataset::source::Dataset,
     config: Config,
     capacity: (usize, usize),
     stride: u32,
@@ -253,11 +253,11 @@ pub fn command(
             CAPACITIES[CAPACITIES.len() - 1]
         );
     };
-    let options = crate::dataset::OpenOptions {
+    let options = crate::dataset::source::OpenOptions {
         split,
         ..Default::default()
     };
-    let ds = crate::dataset::open(root, &options)?;
+    let ds = crate::dataset::open::open(root, &options)?;
     s += &format!("\n{}\n", ds.describe());
     if cap != (capacity, blocks) {
         s += &format!(
@@ -276,19 +276,19 @@ pub fn command(
 /// `n` frames of the built-in box room (`room::orbit`) at `width x height`, as dataset
 /// frames of one trajectory `room/cam_00` (for tests and examples).
 pub fn room_frames(n: usize, width: u32, height: u32) -> Vec<Frame> {
-    use crate::dataset::{FrameId, Rays};
-    let scene = crate::room::Scene::simple_room();
-    let s = width as f32 / crate::room::HYPERSIM_CAMERA.width as f32;
+    use crate::dataset::frame::{FrameId, Rays};
+    let scene = crate::dataset::synthetic::room::Scene::simple_room();
+    let s = width as f32 / crate::dataset::synthetic::room::HYPERSIM_CAMERA.width as f32;
     let cam = sndt_core::Pinhole {
-        fx: crate::room::HYPERSIM_CAMERA.fx * s,
-        fy: crate::room::HYPERSIM_CAMERA.fy * s,
+        fx: crate::dataset::synthetic::room::HYPERSIM_CAMERA.fx * s,
+        fy: crate::dataset::synthetic::room::HYPERSIM_CAMERA.fy * s,
         cx: width as f32 / 2.0,
         cy: height as f32 / 2.0,
         width,
         height,
     };
     let rays = std::sync::Arc::new(Rays::Pinhole(cam));
-    crate::room::orbit(n)
+    crate::dataset::synthetic::room::orbit(n)
         .into_iter()
         .enumerate()
         .map(|(i, pose)| {

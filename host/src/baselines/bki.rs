@@ -28,7 +28,7 @@
 //! block's face neighbours; DESIGN.md asks for results independent of the spatial index).
 //! Voxels live in hashed blocks of 8^3.
 
-use crate::dataset::Frame;
+use crate::dataset::frame::Frame;
 use anyhow::{bail, Result};
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
@@ -92,7 +92,7 @@ impl BkiConfig {
     /// range 20 m, occupancy threshold 0.5.
     ///
     /// ```
-    /// let c = sndt_host::bki::BkiConfig::new(0.1, 0.3);
+    /// let c = sndt_host::baselines::bki::BkiConfig::new(0.1, 0.3);
     /// assert_eq!((c.sigma0, c.prior, c.ds_resolution), (10.0, 0.001, 0.1));
     /// assert!(c.validate().is_ok());
     /// ```
@@ -112,7 +112,7 @@ impl BkiConfig {
     /// Checks every parameter is finite and in range.
     ///
     /// ```
-    /// let mut c = sndt_host::bki::BkiConfig::new(0.1, 0.3);
+    /// let mut c = sndt_host::baselines::bki::BkiConfig::new(0.1, 0.3);
     /// c.kernel_length = f32::NAN;
     /// assert!(c.validate().is_err());
     /// ```
@@ -139,7 +139,7 @@ impl BkiConfig {
 /// `r < 1`, else 0.
 ///
 /// ```
-/// use sndt_host::bki::kernel;
+/// use sndt_host::baselines::bki::kernel;
 /// assert_eq!(kernel(0.0, 0.3, 10.0), 10.0);
 /// assert!((kernel(0.15, 0.3, 10.0) - 10.0 / 6.0).abs() < 1e-5);
 /// assert_eq!(kernel(0.3, 0.3, 10.0), 0.0);
@@ -226,7 +226,7 @@ impl BkiMap {
     /// An empty map.
     ///
     /// ```
-    /// let map = sndt_host::bki::BkiMap::new(sndt_host::bki::BkiConfig::new(0.1, 0.2)).unwrap();
+    /// let map = sndt_host::baselines::bki::BkiMap::new(sndt_host::baselines::bki::BkiConfig::new(0.1, 0.2)).unwrap();
     /// assert_eq!(map.block_count(), 0);
     /// ```
     pub fn new(config: BkiConfig) -> Result<BkiMap> {
@@ -258,8 +258,9 @@ impl BkiMap {
     /// per-pixel labels to use, e.g. the frame's ground truth or a prediction's top 1.
     ///
     /// ```
-    /// use sndt_host::bki::{BkiConfig, BkiMap, Readout};
-    /// use sndt_host::dataset::{open_spec, Dataset};
+    /// use sndt_host::baselines::bki::{BkiConfig, BkiMap, Readout};
+    /// use sndt_host::dataset::{Dataset};
+    /// use sndt_host::dataset::{open_spec};
     /// let data = open_spec("synthetic:1:1", &Default::default()).unwrap();
     /// let frame = data.load(&data.frames()[0]).unwrap();
     /// let mut map = BkiMap::new(BkiConfig::new(0.2, 0.3)).unwrap();
@@ -337,7 +338,7 @@ impl BkiMap {
     /// Adds one training point's kernel weight to every voxel within the kernel length.
     ///
     /// ```
-    /// use sndt_host::bki::{BkiConfig, BkiMap, Sample, kernel};
+    /// use sndt_host::baselines::bki::{BkiConfig, BkiMap, Sample, kernel};
     /// let mut map = BkiMap::new(BkiConfig::new(0.1, 0.3)).unwrap();
     /// map.add_sample(&Sample { position: [0.05, 0.05, 0.05], bin: 7 });
     /// assert_eq!(map.counts([0, 0, 0]).unwrap()[7], 10.0);
@@ -427,8 +428,9 @@ impl BkiMap {
     /// frame, counted as free (holes), unknown and occupied.
     ///
     /// ```
-    /// use sndt_host::bki::{BkiConfig, BkiMap, Readout};
-    /// use sndt_host::dataset::{open_spec, Dataset};
+    /// use sndt_host::baselines::bki::{BkiConfig, BkiMap, Readout};
+    /// use sndt_host::dataset::{Dataset};
+    /// use sndt_host::dataset::{open_spec};
     /// let data = open_spec("synthetic:1:1", &Default::default()).unwrap();
     /// let frame = data.load(&data.frames()[0]).unwrap();
     /// let mut map = BkiMap::new(BkiConfig::new(0.2, 0.3)).unwrap();
@@ -705,7 +707,7 @@ impl LabelGrid {
     /// `dir`, within `max_range` metres.
     ///
     /// ```
-    /// use sndt_host::bki::{BkiConfig, BkiMap, Readout, Sample};
+    /// use sndt_host::baselines::bki::{BkiConfig, BkiMap, Readout, Sample};
     /// let mut map = BkiMap::new(BkiConfig::new(0.1, 0.15)).unwrap();
     /// map.add_sample(&Sample { position: [1.05, 0.05, 0.05], bin: 5 });
     /// let grid = map.label_grid(Readout::Osbki);

@@ -55,7 +55,7 @@
 //! assert!((g.mean.x - 0.04).abs() < 1e-7 && g.count == 3.0);
 //! ```
 
-use crate::dataset::Rays;
+use crate::dataset::frame::Rays;
 use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 use sndt_core::{

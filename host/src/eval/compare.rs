@@ -3,14 +3,14 @@
 //! The same frames go into a [`sndt_core::Map`] and a [`RefMap`] per cell size; then the
 //! maps are compared voxel by voxel (surface voxel sets, voxel means, covariances,
 //! occupancy states, class argmax) and both are back-projected into every frame and
-//! scored with the paper's metrics ([`crate::eval`]). The issue's tolerances at 10 cm
+//! scored with the paper's metrics ([`crate::eval::metrics`]). The issue's tolerances at 10 cm
 //! ([`TOLERANCES`]) are checked by the `reference` test on a fixed synthetic trajectory.
 //!
 //! ```
 //! use sndt_core::{Config, Pinhole};
-//! use sndt_host::compare::{compare, Options};
+//! use sndt_host::eval::compare::{compare, Options};
 //! use sndt_host::dataset::Dataset;
-//! use sndt_host::synth::{SynthOptions, Synthetic};
+//! use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
 //! let camera = Pinhole { fx: 55.4, fy: 55.4, cx: 32.0, cy: 24.0, width: 64, height: 48 };
 //! let split = Synthetic::new(SynthOptions { scenes: 1, frames: 2, camera, predictions: false,
 //!                                           ..Default::default() }).unwrap();
@@ -20,8 +20,11 @@
 //! assert!(r.mean_error_mm.max < 1.4); // at most half a quantum (h/128) per axis
 //! ```
 
-use crate::dataset::{self, Dataset, Frame, LabelSource, Rays};
-use crate::eval::{Confusion, Metrics};
+use crate::dataset::frame::{Frame, LabelSource, Rays};
+
+use crate::dataset::source::Dataset;
+use crate::dataset::{self};
+use crate::eval::metrics::{Confusion, Metrics};
 use crate::reference::{Key, RefMap};
 use anyhow::{bail, Context, Result};
 use rayon::prelude::*;
@@ -101,7 +104,7 @@ impl Agreement {
     /// `same / total` (1 when nothing was compared).
     ///
     /// ```
-    /// let a = sndt_host::compare::Agreement { same: 199, total: 200 };
+    /// let a = sndt_host::eval::compare::Agreement { same: 199, total: 200 };
     /// assert_eq!(a.fraction(), 0.995);
     /// ```
     pub fn fraction(&self) -> f64 {
@@ -137,7 +140,7 @@ impl Spread {
     /// Summarises `values` (any order; NaNs sort last).
     ///
     /// ```
-    /// let s = sndt_host::compare::Spread::of((1..=200).map(f64::from).collect());
+    /// let s = sndt_host::eval::compare::Spread::of((1..=200).map(f64::from).collect());
     /// assert_eq!((s.count, s.median, s.p99, s.max), (200, 100.0, 198.0, 200.0));
     /// assert_eq!(s.mean, 100.5);
     /// ```
@@ -318,7 +321,8 @@ pub fn compare_cells<'f>(
         .map(|c| {
             Ok(Pair {
                 config: *c,
-                core: crate::boxed_map(*c).map_err(|e| anyhow::anyhow!("config {c:?}: {e:?}"))?,
+                core: crate::semantic_map::boxed_map(*c)
+                    .map_err(|e| anyhow::anyhow!("config {c:?}: {e:?}"))?,
                 reference: RefMap::new(*c, CLASSES),
                 core_seconds: 0.0,
                 reference_seconds: 0.0,
@@ -330,7 +334,7 @@ pub fn compare_cells<'f>(
         })
         .collect::<Result<Vec<_>>>()?;
 
-    let bar = crate::progress(count as u64, "integrate");
+    let bar = crate::output::progress::progress(count as u64, "integrate");
     let mut points_total = 0u64;
     for i in 0..count {
         let frame = load(i)?;
@@ -362,7 +366,7 @@ pub fn compare_cells<'f>(
     }
     bar.finish_and_clear();
 
-    let bar = crate::progress(count as u64, "back-project");
+    let bar = crate::output::progress::progress(count as u64, "back-project");
     let indices: Vec<_> = pairs.iter().map(|p| p.reference.render_index()).collect();
     for i in 0..count {
         let frame = load(i)?;
@@ -386,7 +390,7 @@ pub fn compare_cells<'f>(
                 p.core_confusion.add_frame(gt, &core_l, &depth);
                 p.ref_confusion.add_frame(gt, &ref_l, &depth);
                 for ((&c, &r), &d) in core_l.iter().zip(&ref_l).zip(&depth) {
-                    if d < crate::eval::MAX_GT_DEPTH {
+                    if d < crate::eval::metrics::MAX_GT_DEPTH {
                         p.pixels.add(c == r);
                     }
                 }
@@ -556,7 +560,7 @@ pub struct CompareArgs {
 /// Parses `--frames`: `N` = `0..N`, `A..B`, or `A..` (to the end), within `0..len`.
 ///
 /// ```
-/// use sndt_host::compare::frame_range;
+/// use sndt_host::eval::compare::frame_range;
 /// assert_eq!(frame_range(Some("20"), 100).unwrap(), 0..20);
 /// assert_eq!(frame_range(Some("10..30"), 100).unwrap(), 10..30);
 /// assert_eq!(frame_range(Some("90.."), 100).unwrap(), 90..100);
@@ -590,7 +594,7 @@ pub fn frame_range(spec: Option<&str>, len: usize) -> Result<std::ops::Range<usi
 /// Runs `sndt compare`.
 pub fn command(args: &CompareArgs) -> Result<Report> {
     let data: Box<dyn Dataset> = if args.dataset == "synthetic" {
-        use crate::synth::{SynthOptions, Synthetic};
+        use crate::dataset::synthetic::{SynthOptions, Synthetic};
         let predictions = matches!(args.labels, LabelSource::Pred | LabelSource::PredTopk);
         Box::new(Synthetic::new(SynthOptions {
             scenes: 1,

@@ -10,7 +10,7 @@
 //! off by one f32 ulp of `class + score`, which may swap near-ties, so they are not
 //! re-sorted.
 
-use crate::dataset::TopK;
+use crate::dataset::frame::TopK;
 use anyhow::{bail, Context, Result};
 use npyz::WriterBuilder;
 use std::fs::File;
@@ -24,7 +24,7 @@ pub const MAX_SCORE: f32 = 0.9999;
 /// score clamped to `0..=0.9999`. `None` when `class` is not `1..=40` or the score is NaN.
 ///
 /// ```
-/// use sndt_host::npy::encode;
+/// use sndt_host::dataset::npy::encode;
 /// assert_eq!(encode(3, 0.5), Some(3.5));
 /// assert_eq!(encode(40, 1.0), Some(40.0 + 0.9999));
 /// assert_eq!(encode(0, 0.5), None);
@@ -41,7 +41,7 @@ pub fn encode(class: u8, score: f32) -> Option<f32> {
 /// for values outside `1.0..41.0` (including NaN and infinities).
 ///
 /// ```
-/// use sndt_host::npy::decode;
+/// use sndt_host::dataset::npy::decode;
 /// assert_eq!(decode(3.5), Some((3, 0.5)));
 /// assert_eq!(decode(1.0), Some((1, 0.0)));
 /// assert_eq!(decode(0.5), None); // class 0 (void) is never predicted

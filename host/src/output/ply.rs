@@ -1,6 +1,8 @@
 //! Coloured point clouds as binary little-endian PLY (for MeshLab, CloudCompare, Blender).
 
-use crate::dataset::{self, Frame, FrameId, OpenOptions};
+use crate::dataset::frame::{Frame, FrameId};
+use crate::dataset::source::OpenOptions;
+use crate::dataset::{self};
 use anyhow::{Context, Result};
 use std::fmt;
 use std::fs::File;
@@ -15,7 +17,7 @@ pub const GREY: [u8; 3] = [128, 128, 128];
 ///
 /// ```
 /// # let path = std::env::temp_dir().join(format!("sndt-ply-doc-{}.ply", std::process::id()));
-/// sndt_host::ply::write_points(&path, &[([1.0, 2.0, 3.0], [255, 0, 0])]).unwrap();
+/// sndt_host::output::ply::write_points(&path, &[([1.0, 2.0, 3.0], [255, 0, 0])]).unwrap();
 /// let bytes = std::fs::read(&path).unwrap();
 /// assert!(bytes.starts_with(b"ply\nformat binary_little_endian 1.0\nelement vertex 1\n"));
 /// assert_eq!(&bytes[bytes.len() - 3..], &[255, 0, 0]);
@@ -45,7 +47,7 @@ pub fn write_points(path: &Path, points: &[([f32; 3], [u8; 3])]) -> Result<()> {
 }
 
 /// The world points of a frame ([`Frame::world_points`]) coloured by their ground-truth
-/// label ([`crate::colors::color`], void black), or [`GREY`] when the frame has no labels.
+/// label ([`crate::dataset::classes::color`], void black), or [`GREY`] when the frame has no labels.
 pub fn frame_points(frame: &Frame) -> Vec<([f32; 3], [u8; 3])> {
     let labelled = frame.labels.is_some();
     frame
@@ -55,7 +57,7 @@ pub fn frame_points(frame: &Frame) -> Vec<([f32; 3], [u8; 3])> {
             (
                 p,
                 if labelled {
-                    crate::colors::color(l)
+                    crate::dataset::classes::color(l)
                 } else {
                     GREY
                 },
@@ -104,7 +106,7 @@ impl fmt::Display for CloudSummary {
 ///     predictions: None,
 /// };
 /// # let out = std::env::temp_dir().join(format!("sndt-cloud-doc-{}.ply", std::process::id()));
-/// let s = sndt_host::ply::write_frame_cloud(&frame, &out).unwrap();
+/// let s = sndt_host::output::ply::write_frame_cloud(&frame, &out).unwrap();
 /// assert_eq!(s.points, 3);
 /// assert_eq!(s.bounds, Some(([-1.0, -1.0, 2.0], [1.0, 1.0, 2.0])));
 /// # std::fs::remove_file(&out).unwrap();

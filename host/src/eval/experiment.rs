@@ -7,12 +7,13 @@
 //! Each trajectory's frames are loaded once and every configuration is run on them in
 //! turn; trajectories run in parallel (rayon), each map is built by one thread, so update
 //! times are single-threaded figures. S-BKI and OS-BKI share one map per kernel length
-//! (their counts are the same, see [`crate::bki`]); the update time is that map's.
+//! (their counts are the same, see [`crate::baselines::bki`]); the update time is that map's.
 
-use crate::bki::{BkiConfig, BkiMap, Readout, SurfaceStates};
-use crate::dataset::{Dataset, Frame, LabelSource};
-use crate::eval::{Confusion, Metrics};
-use crate::evaluate::{backproject, integrate_frame};
+use crate::baselines::bki::{BkiConfig, BkiMap, Readout, SurfaceStates};
+use crate::dataset::frame::{Frame, LabelSource};
+use crate::dataset::source::Dataset;
+use crate::eval::evaluate::{backproject, integrate_frame};
+use crate::eval::metrics::{Confusion, Metrics};
 use anyhow::{anyhow, bail, Context, Result};
 use rayon::prelude::*;
 use sndt_core::Config;
@@ -315,7 +316,7 @@ fn run_trajectory(
     bki_methods: &[Method],
     progress: &(dyn Fn() + Sync),
 ) -> Result<TrajectoryRuns> {
-    let gt_depths: Vec<Vec<f32>> = frames.iter().map(crate::evaluate::gt_depth).collect();
+    let gt_depths: Vec<Vec<f32>> = frames.iter().map(crate::eval::evaluate::gt_depth).collect();
     let score = |pred: &[u8], i: usize, c: &mut Confusion| {
         if let Some(gt) = &frames[i].labels {
             c.add_frame(gt, pred, &gt_depths[i]);
@@ -354,8 +355,8 @@ fn run_trajectory(
         for &cell in &options.cells {
             if options.methods.contains(&Method::Sndt) {
                 let config = sndt_config(options, cell);
-                let mut map: Box<crate::evaluate::EvalMap> =
-                    crate::boxed_map(config).map_err(|e| anyhow!("config: {e:?}"))?;
+                let mut map: Box<crate::eval::evaluate::EvalMap> =
+                    crate::semantic_map::boxed_map(config).map_err(|e| anyhow!("config: {e:?}"))?;
                 let mut seconds = 0.0;
                 for f in &fed {
                     let t = Instant::now();
@@ -649,7 +650,11 @@ impl Experiment {
             let series = self.fig5_series(labels);
             let refs: Vec<(&str, &[Option<f64>; 41])> =
                 series.iter().map(|(n, v)| (n.as_str(), v)).collect();
-            crate::chart::iou_bars(&p, &format!("Per-class IoU, {}", labels.title()), &refs)?;
+            crate::output::chart::iou_bars(
+                &p,
+                &format!("Per-class IoU, {}", labels.title()),
+                &refs,
+            )?;
             written.push(p);
             let p = out.join(format!("rate_vs_miou_{}.svg", labels.tag()));
             let timing = self.timing();
@@ -667,7 +672,7 @@ impl Experiment {
                 ));
             }
             let series: Vec<_> = points.into_iter().collect();
-            crate::chart::rate_vs_miou(
+            crate::output::chart::rate_vs_miou(
                 &p,
                 &format!("Map update rate vs mIoU, {}", labels.title()),
                 &series,

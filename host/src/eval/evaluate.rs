@@ -9,8 +9,10 @@
 //! times stay comparable to single-threaded figures; back-projection of a frame is split
 //! into row bands rendered in parallel.
 
-use crate::dataset::{Dataset, Frame, LabelSource, Rays};
-use crate::eval::{Confusion, Metrics};
+use crate::dataset::frame::{Frame, LabelSource, Rays};
+
+use crate::dataset::source::Dataset;
+use crate::eval::metrics::{Confusion, Metrics};
 use anyhow::{anyhow, Context, Result};
 use rayon::prelude::*;
 use sndt_core::{
@@ -34,7 +36,7 @@ pub struct EvalOptions {
     /// Use every `stride`-th pixel when mapping (1 = all, as the paper).
     pub stride: u32,
     /// Frames whose back-projections to return in [`Evaluation::kept`] (for pictures).
-    pub keep_frames: Vec<crate::dataset::FrameId>,
+    pub keep_frames: Vec<crate::dataset::frame::FrameId>,
     /// Whether to return the final maps in [`Evaluation::maps`].
     pub keep_maps: bool,
     /// Directory to write each trajectory's final map snapshot into
@@ -91,7 +93,7 @@ pub struct Evaluation {
     /// themselves (e.g. the network alone, without mapping).
     pub input: Confusion,
     /// Back-projections of the frames asked for in [`EvalOptions::keep_frames`].
-    pub kept: Vec<(crate::dataset::FrameId, Vec<u8>)>,
+    pub kept: Vec<(crate::dataset::frame::FrameId, Vec<u8>)>,
     /// Final maps, per trajectory, when [`EvalOptions::keep_maps`].
     pub maps: Vec<Box<EvalMap>>,
 }
@@ -137,7 +139,11 @@ impl Evaluation {
         s += "\n| class | IoU |\n|---|---|\n";
         for (c, v) in m.iou.iter().enumerate() {
             if let Some(v) = v {
-                s += &format!("| {} | {:.2} % |\n", crate::colors::NYU40[c], v * 100.0);
+                s += &format!(
+                    "| {} | {:.2} % |\n",
+                    crate::dataset::classes::NYU40[c],
+                    v * 100.0
+                );
             }
         }
         s
@@ -256,14 +262,14 @@ pub fn evaluate(
         Confusion,
         Confusion,
         TrajectoryResult,
-        Vec<(crate::dataset::FrameId, Vec<u8>)>,
+        Vec<(crate::dataset::frame::FrameId, Vec<u8>)>,
         Option<Box<EvalMap>>,
     );
     let results: Vec<Result<Part>> = trajectories
         .par_iter()
         .map(|(name, ids)| -> Result<Part> {
-            let mut map: Box<EvalMap> =
-                crate::boxed_map(options.config).map_err(|e| anyhow!("config: {e:?}"))?;
+            let mut map: Box<EvalMap> = crate::semantic_map::boxed_map(options.config)
+                .map_err(|e| anyhow!("config: {e:?}"))?;
             let mut kept = Vec::with_capacity(ids.len());
             let mut input = Confusion::default();
             let mut update_ms = Vec::with_capacity(ids.len());
@@ -307,7 +313,12 @@ pub fn evaluate(
                         std::fs::create_dir_all(dir)
                             .with_context(|| format!("creating {}", dir.display()))?;
                     }
-                    crate::prepared::write_gray8(&path, f.rays.width(), f.rays.height(), &pred)?;
+                    crate::dataset::prepared::write_gray8(
+                        &path,
+                        f.rays.width(),
+                        f.rays.height(),
+                        &pred,
+                    )?;
                 }
                 if options.keep_frames.contains(&f.id) {
                     images.push((f.id.clone(), pred));
@@ -367,7 +378,8 @@ pub fn save_snapshot<const V: usize, const B: usize, const C: usize>(
 /// Reads a map snapshot file into a heap map of the evaluation's capacity.
 pub fn load_snapshot(path: &std::path::Path) -> Result<Box<EvalMap>> {
     let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
-    let mut map: Box<EvalMap> = crate::boxed_map(Config::DEFAULT).map_err(|e| anyhow!("{e:?}"))?;
+    let mut map: Box<EvalMap> =
+        crate::semantic_map::boxed_map(Config::DEFAULT).map_err(|e| anyhow!("{e:?}"))?;
     map.read_snapshot(&bytes)
         .map_err(|e| anyhow!("{}: not a readable sndt snapshot: {e:?}", path.display()))?;
     Ok(map)

@@ -1,6 +1,6 @@
 //! PNG pictures: label images side by side, a bird's-eye view of a semantic map.
 
-use crate::colors::color;
+use crate::dataset::classes::color;
 use anyhow::{Context, Result};
 use sndt_core::{Map, Occupancy};
 use std::path::Path;

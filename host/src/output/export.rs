@@ -1,7 +1,7 @@
 //! Export of a map's Gaussians for MeshLab / CloudCompare: coloured points at the means,
 //! or small coloured ellipsoid meshes at one standard deviation (binary PLY).
 
-use crate::colors::color;
+use crate::dataset::classes::color;
 use anyhow::{Context, Result};
 use sndt_core::{Map, Matrix3, Occupancy, Vector3};
 use std::io::Write;
@@ -79,14 +79,14 @@ fn unit_sphere() -> (Vec<Vector3<f32>>, Vec<[u32; 3]>) {
 /// Writes the means as coloured points (binary PLY).
 pub fn write_points(path: &Path, es: &[Ellipsoid]) -> Result<()> {
     let pts: Vec<([f32; 3], [u8; 3])> = es.iter().map(|e| (e.mean, color(e.class))).collect();
-    crate::ply::write_points(path, &pts)
+    crate::output::ply::write_points(path, &pts)
 }
 
 /// Writes each Gaussian as a coloured ellipsoid mesh at `sigmas` standard deviations
 /// (binary little-endian PLY with faces).
 ///
 /// ```
-/// use sndt_host::export::{write_ellipsoids, Ellipsoid};
+/// use sndt_host::output::export::{write_ellipsoids, Ellipsoid};
 /// let e = Ellipsoid { mean: [1.0, 2.0, 3.0], covariance: [[0.04, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 1e-6]], class: 1 };
 /// let path = std::env::temp_dir().join(format!("sndt-ell-{}.ply", std::process::id()));
 /// write_ellipsoids(&path, &[e], 1.0).unwrap();

@@ -13,10 +13,13 @@
 
 pub mod geometry;
 pub mod predict;
+pub mod room;
 pub mod scenes;
 
-use crate::dataset::{Dataset, Frame, FrameId, Rays};
-use crate::eval::Confusion;
+use crate::dataset::frame::{Frame, FrameId, Rays};
+
+use crate::dataset::source::Dataset;
+use crate::eval::metrics::Confusion;
 use anyhow::{bail, Result};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -30,7 +33,7 @@ use std::sync::Arc;
 pub const DEFAULT_SEED: u64 = 20_240_710;
 
 /// The camera of the synthetic split: Hypersim's nominal 1024x768 pinhole, exact here.
-pub const CAMERA: Pinhole = crate::room::HYPERSIM_CAMERA;
+pub const CAMERA: Pinhole = crate::dataset::synthetic::room::HYPERSIM_CAMERA;
 
 /// Rays longer than this hit nothing (metres).
 const MAX_RAY: f32 = 100.0;
@@ -52,10 +55,10 @@ pub struct Render {
 /// parallel.
 ///
 /// ```
-/// use sndt_host::synth::{render, scenes::SynthScene};
+/// use sndt_host::dataset::synthetic::{render, scenes::SynthScene};
 /// let scene = SynthScene::generate(1, 5);
 /// let cam = sndt_core::Pinhole { fx: 40.0, fy: 40.0, cx: 32.0, cy: 24.0, width: 64, height: 48 };
-/// let pose = sndt_host::room::look_at([1.0, 1.0, 1.5], [2.0, 2.0, 1.0]);
+/// let pose = sndt_host::dataset::synthetic::room::look_at([1.0, 1.0, 1.5], [2.0, 2.0, 1.0]);
 /// let r = render(&scene, &pose, &cam);
 /// assert!(r.planar.iter().all(|&d| d > 0.0)); // a closed room: every ray hits
 /// ```
@@ -101,7 +104,7 @@ pub fn render(scene: &SynthScene, pose: &Isometry3<f32>, cam: &Pinhole) -> Rende
 /// to anything. Deterministic in `seed`.
 ///
 /// ```
-/// use sndt_host::synth::{trajectory, scenes::SynthScene};
+/// use sndt_host::dataset::synthetic::{trajectory, scenes::SynthScene};
 /// let scene = SynthScene::generate(0, 3);
 /// let poses = trajectory(&scene, 100, 9);
 /// assert_eq!(poses.len(), 100);
@@ -184,7 +187,7 @@ pub fn trajectory(scene: &SynthScene, frames: usize, seed: u64) -> Vec<Isometry3
             look = Vector3::new(look.x, look.y, look.z.clamp(-0.7, 0.7)).normalize();
         }
         let t = [eye[0] + look.x, eye[1] + look.y, eye[2] + look.z];
-        poses.push(crate::room::look_at(eye, t));
+        poses.push(crate::dataset::synthetic::room::look_at(eye, t));
     }
     poses
 }
@@ -209,7 +212,7 @@ impl DepthNoise {
     /// Standard deviation at planar depth `z`.
     ///
     /// ```
-    /// let n = sndt_host::synth::DepthNoise::KINECT;
+    /// let n = sndt_host::dataset::synthetic::DepthNoise::KINECT;
     /// assert!((n.sigma(3.4) - (0.0012 + 0.0019 * 9.0)).abs() < 1e-7);
     /// ```
     pub fn sigma(&self, z: f32) -> f32 {
@@ -277,7 +280,7 @@ impl Synthetic {
     ///
     /// ```
     /// use sndt_host::dataset::Dataset;
-    /// use sndt_host::synth::{Synthetic, SynthOptions};
+    /// use sndt_host::dataset::synthetic::{Synthetic, SynthOptions};
     /// let camera = sndt_core::Pinhole { fx: 40.0, fy: 40.0, cx: 32.0, cy: 24.0, width: 64, height: 48 };
     /// let split = Synthetic::new(SynthOptions { scenes: 2, frames: 3, camera, ..Default::default() }).unwrap();
     /// assert_eq!(split.frames().len(), 6);
@@ -423,7 +426,7 @@ pub fn write_split(
             let mut conf = Confusion::default();
             for id in chunk {
                 let f = split.load(id)?;
-                crate::prepared::write_frame(root, "test", &f)?;
+                crate::dataset::prepared::write_frame(root, "test", &f)?;
                 add_stats(&f, &mut hist, &mut conf);
                 progress();
             }
@@ -442,7 +445,7 @@ pub fn write_split(
         }
         summary.prediction.merge(&conf);
     }
-    crate::prepared::write_split_list(root, "test", &ids)?;
+    crate::dataset::prepared::write_split_list(root, "test", &ids)?;
     Ok(summary)
 }
 

@@ -14,7 +14,7 @@ use std::path::Path;
 /// a[1] = Some(0.9);
 /// a[23] = Some(0.4);
 /// let path = dir.join("iou.svg");
-/// sndt_host::chart::iou_bars(&path, "IoU", &[("GT labels", &a)]).unwrap();
+/// sndt_host::output::chart::iou_bars(&path, "IoU", &[("GT labels", &a)]).unwrap();
 /// let svg = std::fs::read_to_string(&path).unwrap();
 /// assert!(svg.contains("books") && svg.contains("wall"));
 /// # std::fs::remove_dir_all(&dir).unwrap();
@@ -43,7 +43,7 @@ pub fn iou_bars(path: &Path, title: &str, series: &[(&str, &[Option<f64>; 41])])
         .x_label_formatter(&|x| {
             let i = x.floor() as usize;
             if (x - x.floor() - 0.5).abs() < 1e-6 && i < names.len() {
-                crate::colors::NYU40[names[i]].to_string()
+                crate::dataset::classes::NYU40[names[i]].to_string()
             } else {
                 String::new()
             }
@@ -100,7 +100,7 @@ pub type LabelledSeries = [(String, Vec<(f64, f64, String)>)];
 /// std::fs::create_dir_all(&dir).unwrap();
 /// let path = dir.join("rate.svg");
 /// let s = vec![("S-NDT".to_string(), vec![(3.5, 72.0, "10cm".to_string()), (1.0, 78.0, "5cm".to_string())])];
-/// sndt_host::chart::rate_vs_miou(&path, "rate", &s).unwrap();
+/// sndt_host::output::chart::rate_vs_miou(&path, "rate", &s).unwrap();
 /// let svg = std::fs::read_to_string(&path).unwrap();
 /// assert!(svg.contains("S-NDT") && svg.contains("10cm"));
 /// # std::fs::remove_dir_all(&dir).unwrap();

@@ -18,7 +18,7 @@
 //! evaluation of DESIGN.md section 4 (the paper's ESANet: 41.17 %).
 
 use super::scenes::class::*;
-use crate::dataset::TopK;
+use crate::dataset::frame::TopK;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::collections::HashMap;
@@ -141,7 +141,7 @@ enum Fate {
 /// drives everything that changes every frame. Deterministic in its inputs.
 ///
 /// ```
-/// use sndt_host::synth::predict::{predict, ModelParams};
+/// use sndt_host::dataset::synthetic::predict::{predict, ModelParams};
 /// let (w, h) = (64u32, 48u32);
 /// let labels = vec![1u8; (w * h) as usize];
 /// let instances = vec![3u16; (w * h) as usize];

@@ -465,7 +465,7 @@ pub struct VectorRun {
 /// returns the map's snapshot CRC with the counts.
 pub fn run(v: &TestVector) -> Result<VectorRun> {
     let mut map: Box<VectorMap> =
-        crate::boxed_map(v.config).map_err(|e| anyhow::anyhow!("config: {e:?}"))?;
+        crate::semantic_map::boxed_map(v.config).map_err(|e| anyhow::anyhow!("config: {e:?}"))?;
     let mut reports = Vec::with_capacity(v.frames.len());
     for (k, f) in v.frames.iter().enumerate() {
         let image = DepthImage {
@@ -523,7 +523,7 @@ pub fn expected_crc(bytes: &[u8]) -> Result<u32> {
 /// Parses `0x1234abcd` (surrounding whitespace ignored), the format of `expected_crc.txt`.
 ///
 /// ```
-/// assert_eq!(sndt_host::testvector::parse_crc(" 0x9bdc524e\n").unwrap(), 0x9bdc524e);
+/// assert_eq!(sndt_host::embedded::testvector::parse_crc(" 0x9bdc524e\n").unwrap(), 0x9bdc524e);
 /// ```
 pub fn parse_crc(s: &str) -> Result<u32> {
     let s = s.trim();

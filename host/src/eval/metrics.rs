@@ -41,7 +41,7 @@ impl Metrics {
     /// Per-class IoU keyed by NYU40 class name (classes present in the ground truth).
     ///
     /// ```
-    /// let mut c = sndt_host::eval::Confusion::default();
+    /// let mut c = sndt_host::eval::metrics::Confusion::default();
     /// c.add_frame(&[1, 1], &[1, 2], &[1.0, 1.0]);
     /// let j = c.metrics().iou_by_name();
     /// assert_eq!(j["wall"], serde_json::json!(0.5));
@@ -52,7 +52,12 @@ impl Metrics {
             .iter()
             .enumerate()
             .filter_map(|(c, v)| {
-                v.map(|v| (crate::colors::NYU40[c].to_string(), serde_json::json!(v)))
+                v.map(|v| {
+                    (
+                        crate::dataset::classes::NYU40[c].to_string(),
+                        serde_json::json!(v),
+                    )
+                })
             })
             .collect()
     }
@@ -64,7 +69,7 @@ impl Confusion {
     /// depth in metres (pixels at or beyond 20 m are skipped; 0 is kept).
     ///
     /// ```
-    /// let mut c = sndt_host::eval::Confusion::default();
+    /// let mut c = sndt_host::eval::metrics::Confusion::default();
     /// c.add_frame(&[1, 1, 2, 0], &[1, 255, 2, 5], &[1.0, 1.0, 25.0, 1.0]);
     /// assert_eq!(c.cm[1][1], 1);
     /// assert_eq!(c.cm[1][41], 1);

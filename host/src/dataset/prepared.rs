@@ -16,8 +16,11 @@
 //! undoes that. Without an intrinsics file (the authors' data) the camera is the nominal
 //! Hypersim pinhole, or with [`OpenOptions::paper_fy`] the authors' wrong fy.
 
-use crate::dataset::{Dataset, Frame, FrameId, OpenOptions, Rays};
-use crate::npy;
+use crate::dataset::frame::{Frame, FrameId, Rays};
+
+use crate::dataset::npy;
+use crate::dataset::source::Dataset;
+use crate::dataset::source::OpenOptions;
 use anyhow::{bail, Context, Result};
 use sndt_core::{DepthKind, Isometry3, Pinhole, Translation3, UnitQuaternion};
 use std::collections::HashMap;
@@ -37,9 +40,9 @@ pub const PAPER_FY: f32 = 927.06;
 /// `paper_fy` the authors' fy = 927.06.
 ///
 /// ```
-/// let cam = sndt_host::prepared::nominal_camera(true);
+/// let cam = sndt_host::dataset::prepared::nominal_camera(true);
 /// assert_eq!((cam.fx, cam.fy, cam.width, cam.height), (886.81, 927.06, 1024, 768));
-/// assert_eq!(sndt_host::prepared::nominal_camera(false).fy, 886.81);
+/// assert_eq!(sndt_host::dataset::prepared::nominal_camera(false).fy, 886.81);
 /// ```
 pub fn nominal_camera(paper_fy: bool) -> Pinhole {
     Pinhole {
@@ -81,7 +84,7 @@ impl Extrinsics {
     /// quaternion whose norm is not 1 (within [`QUAT_NORM_TOLERANCE`]).
     ///
     /// ```
-    /// use sndt_host::prepared::Extrinsics;
+    /// use sndt_host::dataset::prepared::Extrinsics;
     /// let e = Extrinsics { x: 1.0, y: 2.0, z: 3.0, quat_x: 0.0, quat_y: 0.0, quat_z: 0.0, quat_w: 1.0 };
     /// let pose = e.to_pose().unwrap();
     /// // identity OpenGL rotation: the camera looks along world -z
@@ -530,7 +533,7 @@ fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
 /// beyond 65.535 m.
 ///
 /// ```
-/// use sndt_host::prepared::depth_to_mm;
+/// use sndt_host::dataset::prepared::depth_to_mm;
 /// assert_eq!(depth_to_mm(1.2345), 1235);
 /// assert_eq!(depth_to_mm(0.0), 0);
 /// assert_eq!(depth_to_mm(f32::NAN), 0);
@@ -558,7 +561,8 @@ pub fn depth_to_mm(d: f32) -> u16 {
 /// Only pinhole frames can be written: the layout has no place for per-pixel rays.
 ///
 /// ```
-/// use sndt_host::dataset::{self, Dataset, Frame, FrameId, Rays};
+/// use sndt_host::dataset::{Dataset, Frame, FrameId, Rays};
+/// use sndt_host::dataset;
 /// # let root = std::env::temp_dir().join(format!("sndt-prepared-doc-{}", std::process::id()));
 /// let cam = sndt_core::Pinhole { fx: 2.0, fy: 2.0, cx: 1.0, cy: 1.0, width: 2, height: 2 };
 /// let frame = Frame {
@@ -570,8 +574,8 @@ pub fn depth_to_mm(d: f32) -> u16 {
 ///     labels: Some(vec![1, 2, 0, 40]),
 ///     predictions: None,
 /// };
-/// sndt_host::prepared::write_frame(&root, "test", &frame).unwrap();
-/// sndt_host::prepared::write_split_list(&root, "test", &[frame.id.clone()]).unwrap();
+/// sndt_host::dataset::prepared::write_frame(&root, "test", &frame).unwrap();
+/// sndt_host::dataset::prepared::write_split_list(&root, "test", &[frame.id.clone()]).unwrap();
 /// let data = dataset::open(&root, &dataset::OpenOptions::default()).unwrap();
 /// let back = data.load(&data.frames()[0]).unwrap();
 /// assert_eq!((back.depth, back.labels), (frame.depth, frame.labels));

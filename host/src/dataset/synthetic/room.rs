@@ -55,7 +55,7 @@ impl Scene {
     /// books, a thin picture on a wall and a lamp.
     ///
     /// ```
-    /// let room = sndt_host::room::Scene::simple_room();
+    /// let room = sndt_host::dataset::synthetic::room::Scene::simple_room();
     /// assert!(room.boxes.len() > 8);
     /// ```
     pub fn simple_room() -> Scene {
@@ -143,7 +143,7 @@ impl Scene {
 /// Camera-to-world pose of a camera at `eye` looking at `target`, z-up world, OpenCV axes.
 ///
 /// ```
-/// use sndt_host::room::look_at;
+/// use sndt_host::dataset::synthetic::room::look_at;
 /// let pose = look_at([0.0, 0.0, 1.0], [1.0, 0.0, 1.0]);
 /// let fwd = pose.rotation * sndt_core::Vector3::z();
 /// assert!((fwd.x - 1.0).abs() < 1e-6);
@@ -171,7 +171,7 @@ pub const HYPERSIM_CAMERA: Pinhole = Pinhole {
 /// `n` poses walking around the room at person height, looking across it.
 ///
 /// ```
-/// let poses = sndt_host::room::orbit(10);
+/// let poses = sndt_host::dataset::synthetic::room::orbit(10);
 /// assert_eq!(poses.len(), 10);
 /// ```
 pub fn orbit(n: usize) -> Vec<Isometry3<f32>> {

@@ -44,7 +44,7 @@ impl Primitive {
     /// An axis-aligned box from its corners.
     ///
     /// ```
-    /// use sndt_host::synth::geometry::{Primitive, Shape};
+    /// use sndt_host::dataset::synthetic::geometry::{Primitive, Shape};
     /// let p = Primitive::axis_box([0.0, 0.0, 0.0], [2.0, 1.0, 1.0], 7, 3);
     /// assert_eq!(p.shape, Shape::Box { center: [1.0, 0.5, 0.5], half: [1.0, 0.5, 0.5], yaw: 0.0 });
     /// ```
@@ -133,7 +133,7 @@ impl Shape {
     /// from outside, when that is in `(0, t_max)`.
     ///
     /// ```
-    /// use sndt_host::synth::geometry::Shape;
+    /// use sndt_host::dataset::synthetic::geometry::Shape;
     /// let b = Shape::Box { center: [3.0, 0.0, 0.0], half: [1.0, 1.0, 1.0], yaw: 0.0 };
     /// assert_eq!(b.enter(&[0.0, 0.0, 0.0], &[1.0, 0.0, 0.0], 10.0), Some(2.0));
     /// let c = Shape::Cylinder { xy: [0.0, 5.0], radius: 0.5, z0: -1.0, z1: 1.0 };
@@ -257,7 +257,7 @@ impl Bvh {
     /// Builds the hierarchy (median split on the longest axis of the centroids).
     ///
     /// ```
-    /// use sndt_host::synth::geometry::{Bvh, Primitive, Shape};
+    /// use sndt_host::dataset::synthetic::geometry::{Bvh, Primitive, Shape};
     /// let wall = Primitive { shape: Shape::Box { center: [2.0, 0.0, 0.0], half: [0.1, 5.0, 5.0], yaw: 0.0 },
     ///                        label: 1, instance: 0 };
     /// let bvh = Bvh::new(vec![wall]);

@@ -2,11 +2,13 @@
 //! cell size with ground-truth and with predicted labels, evaluated as the paper does,
 //! printed next to the paper's S-NDT numbers, and drawn.
 
-use crate::colors::{render_color, NYU40};
-use crate::dataset::{Dataset, Every, FrameId, LabelSource};
-use crate::evaluate::{evaluate, EvalOptions, Evaluation, PAPER_ESANET_MIOU, PAPER_SNDT};
-use crate::synth::{SynthOptions, Synthetic};
-use crate::{chart, picture, progress};
+use crate::dataset::classes::{render_color, NYU40};
+use crate::dataset::frame::{FrameId, LabelSource};
+use crate::dataset::source::{Dataset, Every};
+use crate::dataset::synthetic::{SynthOptions, Synthetic};
+use crate::eval::evaluate::{evaluate, EvalOptions, Evaluation, PAPER_ESANET_MIOU, PAPER_SNDT};
+use crate::output::progress::progress;
+use crate::output::{chart, picture};
 use anyhow::{Context, Result};
 use sndt_core::{Config, MissModel};
 use std::path::PathBuf;
