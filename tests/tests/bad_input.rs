@@ -1,4 +1,4 @@
-//! Requirement 8: every class of bad input is rejected or counted, never panics, and never
+//! Bad input: every class of bad input is rejected or counted, never panics, and never
 //! loses what is already in the map.
 
 use sndt_core::{

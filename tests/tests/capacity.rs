@@ -1,4 +1,4 @@
-//! Requirement 4: a tiny map never exceeds its capacity, every eviction and drop is counted
+//! Capacity: a tiny map never exceeds its capacity, every eviction and drop is counted
 //! (per frame and in the totals), and every point is accounted for.
 
 use sndt_core::{

@@ -83,7 +83,7 @@ fn check_walk(visited: &[VoxelKey], first: VoxelKey, last: VoxelKey) {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
 
-    /// Requirement 2: `voxels_on_segment` visits exactly the voxels that dense sampling and
+    /// `voxels_on_segment` visits exactly the voxels that dense sampling and
     /// the exact reference find, in order, each step to a face neighbour.
     #[test]
     fn voxels_on_segment_matches_brute_force(from in point(), to in point(), h in 0.05f32..0.2) {
@@ -153,7 +153,7 @@ fn rotation() -> impl Strategy<Value = UnitQuaternion<f32>> {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 128, ..ProptestConfig::default() })]
 
-    /// Requirement 3: one point, `MissModel::Constant`: the cells with negative log-odds are
+    /// Free space of one point, `MissModel::Constant`: the cells with negative log-odds are
     /// exactly the voxels the segment from the sensor to the core's ray target passes
     /// through, end voxel excluded, and the end voxel is occupied.
     ///

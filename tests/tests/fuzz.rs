@@ -1,4 +1,4 @@
-//! Requirement 9: random garbage (NaN/inf/huge/tiny coordinates, any labels, any poses,
+//! Fuzzing the core: random garbage (NaN/inf/huge/tiny coordinates, any labels, any poses,
 //! any image shapes, random valid configs) never panics a small map, keeps it within
 //! capacity, accounts for every point, and leaves it in a state whose snapshot loads back.
 

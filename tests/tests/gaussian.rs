@@ -1,4 +1,4 @@
-//! Requirement 10: hand-checked end-to-end voxel statistics: mean and covariance against an
+//! Hand-checked end-to-end voxel statistics: mean and covariance against an
 //! f64 formula, decay, and the class histogram.
 
 // Index loops over matrix entries (i, j) read like the formulas they check.

@@ -1,4 +1,4 @@
-//! Requirement 1: the map after a frame does not depend on the order of the frame's points
+//! Order independence: the map after a frame does not depend on the order of the frame's points
 //! (integer sums, one hit per end voxel, rays in sorted order). Checked on snapshot bytes.
 
 use proptest::prelude::*;

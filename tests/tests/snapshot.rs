@@ -1,4 +1,4 @@
-//! Requirement 5: snapshot round trip, corruption, truncation, buffer and class checks.
+//! Snapshots: round trip, corruption, truncation, buffer and class checks.
 
 use proptest::prelude::*;
 use sndt_core::{Config, Error, Isometry3, Map, MissModel, SNAPSHOT_HEADER_BYTES};
