@@ -1,6 +1,7 @@
 //! The one plain configuration struct of the map, with documented defaults.
 
-use crate::Error;
+use crate::error::Error;
+use crate::labels::MAX_TOP_K;
 
 /// How a voxel traversed by a free-space ray loses occupancy.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -163,7 +164,7 @@ impl Config {
             && within(self.noise_quadratic, 0.0, 1e3)
             && within(self.max_range, 1e-3, 1e4)
             && self.top_k >= 1
-            && self.top_k as usize <= crate::MAX_TOP_K
+            && self.top_k as usize <= MAX_TOP_K
             && self.votes_per_frame >= 1
             && self.votes_per_frame <= 64
             && within(self.render_radius, 0.1, 10.0);

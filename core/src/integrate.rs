@@ -16,12 +16,17 @@
 use crate::block::{bits, Block};
 use crate::config::{to_fixed, MissModel};
 use crate::dda::Dda;
+use crate::error::Error;
 use crate::key::{axis_key, floor_i32, VoxelKey};
+use crate::labels::{LabeledPoint, Labels};
 use crate::map::Map;
 use crate::table::{Entry, NIL};
 use crate::voxel::{PrepCache, Prepared, Voxel, EXPONENT_SHIFT, VOTES_TAKEN_MAX};
-use crate::{Error, LabeledPoint, Labels, MAX_FRAME_POINTS, MAX_TOP_K};
 use nalgebra::{Isometry3, Matrix3, Vector3};
+
+/// Most points one frame may hold. With `quant_bits <= 6` and `n_max <= 65535` this bounds a
+/// voxel's count at `65535 + 2^20`, so `|S2| <= 2^10 (65535 + 2^20) < 2^31`: no overflow.
+pub const MAX_FRAME_POINTS: usize = 1 << 20;
 
 /// What one frame did. Every point is accounted for exactly once in `points_used`,
 /// `truncated` or one of the `rejected_*`/`dropped_points` counters.
@@ -399,7 +404,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             return;
         }
         let n = labels.len as usize;
-        if n > MAX_TOP_K || labels.classes[..n].iter().any(|&c| c as usize > C) {
+        if !labels.fits(C) {
             f.report.rejected_label += 1;
             return;
         }

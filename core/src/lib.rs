@@ -59,8 +59,10 @@ mod block;
 mod config;
 mod crc;
 mod dda;
+mod error;
 mod integrate;
 mod key;
+mod labels;
 mod map;
 mod raycast;
 mod snapshot;
@@ -71,124 +73,15 @@ mod voxel;
 mod tests;
 
 pub use config::{Config, MissModel, LOGODDS_ONE};
+pub use error::Error;
 pub use integrate::{
     next_vote_exponent, pose_from_matrix, takes_vote, vote_hash, voxels_on_segment, DepthImage,
-    DepthKind, FrameReport, LabelImage, Pinhole, MAX_VOTE_EXPONENT,
+    DepthKind, FrameReport, LabelImage, Pinhole, MAX_FRAME_POINTS, MAX_VOTE_EXPONENT,
 };
 pub use key::{VoxelKey, KEY_LIMIT};
+pub use labels::{LabeledPoint, Labels, MAX_TOP_K};
 pub use map::{Map, MapStats, Occupancy, VoxelView, BLOCK_BYTES, MAP_HEADER_BYTES};
 pub use nalgebra::{Isometry3, Matrix3, Point3, Translation3, UnitQuaternion, Vector3};
 pub use raycast::{RayHit, INVALID_LABEL};
 pub use snapshot::{SNAPSHOT_BLOCK_BYTES, SNAPSHOT_HEADER_BYTES, SNAPSHOT_VERSION};
 pub use voxel::Gaussian;
-
-/// Most labels a point can carry (top-k with k <= 3).
-pub const MAX_TOP_K: usize = 3;
-
-/// Most points one frame may hold. With `quant_bits <= 6` and `n_max <= 65535` this bounds a
-/// voxel's count at `65535 + 2^20`, so `|S2| <= 2^10 (65535 + 2^20) < 2^31`: no overflow.
-pub const MAX_FRAME_POINTS: usize = 1 << 20;
-
-/// Everything that can go wrong. Small and `Copy`; bad input never panics and never loses
-/// what is already in the map.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Error {
-    /// A [`Config`] field is out of its documented range.
-    InvalidConfig,
-    /// The sensor pose has a non-finite value or a rotation that is not orthonormal.
-    InvalidPose,
-    /// The sensor origin lies outside the key range.
-    PoseOutOfRange,
-    /// More than [`MAX_FRAME_POINTS`] points in one frame.
-    FrameTooLarge,
-    /// Depth/label image sizes disagree with the camera, or the camera is invalid.
-    InvalidImage,
-    /// The caller's buffer is too small.
-    BufferTooSmall,
-    /// Snapshot: too short, or its length disagrees with its header.
-    SnapshotTruncated,
-    /// Snapshot: wrong magic bytes.
-    SnapshotMagic,
-    /// Snapshot: a version this build cannot read.
-    SnapshotVersion,
-    /// Snapshot: class count differs from the map's `CLASSES`.
-    SnapshotClasses,
-    /// Snapshot: more voxels or blocks than this map's capacity.
-    SnapshotCapacity,
-    /// Snapshot: CRC-32 mismatch.
-    SnapshotChecksum,
-    /// Snapshot: CRC matches but the content breaks an invariant.
-    SnapshotCorrupt,
-}
-
-/// Top-k labels of one point: NYU40-style class ids `1..=CLASSES` (0 = void, which adds
-/// geometry but no vote) with optional scores (0..=255, 255 when unknown).
-///
-/// ```
-/// use sndt_core::Labels;
-/// let l = Labels::top_k(&[(5, 200), (7, 40)]);
-/// assert_eq!(l.len, 2);
-/// assert_eq!(Labels::top1(3).classes[0], 3);
-/// ```
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Labels {
-    /// Class ids, best first.
-    pub classes: [u8; MAX_TOP_K],
-    /// Scores, best first.
-    pub scores: [u8; MAX_TOP_K],
-    /// How many entries are used (0..=3).
-    pub len: u8,
-}
-
-impl Labels {
-    /// No label: the point adds geometry only.
-    pub const NONE: Labels = Labels {
-        classes: [0; MAX_TOP_K],
-        scores: [0; MAX_TOP_K],
-        len: 0,
-    };
-
-    /// One label with full score.
-    pub const fn top1(class: u8) -> Labels {
-        Labels {
-            classes: [class, 0, 0],
-            scores: [255, 0, 0],
-            len: 1,
-        }
-    }
-
-    /// Up to three `(class, score)` pairs, best first; extra pairs are ignored.
-    pub fn top_k(pairs: &[(u8, u8)]) -> Labels {
-        let mut l = Labels::NONE;
-        for (i, &(c, s)) in pairs.iter().take(MAX_TOP_K).enumerate() {
-            l.classes[i] = c;
-            l.scores[i] = s;
-            l.len = i as u8 + 1;
-        }
-        l
-    }
-}
-
-/// A point in the sensor frame (metres) with its labels.
-///
-/// ```
-/// use sndt_core::{LabeledPoint, Labels, Point3};
-/// let p = LabeledPoint::new(Point3::new(0.0, 0.0, 1.5), Labels::top1(2));
-/// assert_eq!(p.labels.classes[0], 2);
-/// ```
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LabeledPoint {
-    /// Position in the sensor frame, metres.
-    pub position: Point3<f32>,
-    /// Segmentation labels.
-    pub labels: Labels,
-}
-
-impl LabeledPoint {
-    /// A labelled point.
-    pub const fn new(position: Point3<f32>, labels: Labels) -> Self {
-        LabeledPoint { position, labels }
-    }
-}

@@ -1,7 +1,8 @@
 //! The map: two fixed tables (occupancy blocks, NDT voxels), queries and eviction.
 
 use crate::block::{bits, Block};
-use crate::config::{Config, LOGODDS_ONE};
+use crate::config::{Config, MissModel, LOGODDS_ONE};
+use crate::error::Error;
 use crate::key::VoxelKey;
 use crate::table::{Entry, Table};
 use crate::voxel::{Gaussian, Voxel};
@@ -194,7 +195,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             top_k: 0,
             min_score: 0,
             votes_per_frame: 0,
-            miss_model: crate::MissModel::NdtOm,
+            miss_model: MissModel::NdtOm,
             render_radius: 0.0,
         })
     }
@@ -213,7 +214,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// c.n_max = 1;
     /// assert!(sndt_core::Map::<8, 8, 2>::try_new(c).is_err());
     /// ```
-    pub fn try_new(config: Config) -> Result<Self, crate::Error> {
+    pub fn try_new(config: Config) -> Result<Self, Error> {
         config.validate()?;
         Ok(Self::new(config))
     }
@@ -226,7 +227,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// map.reset(Config::with_cell_size(0.2)).unwrap();
     /// assert_eq!(map.config().cell_size, 0.2);
     /// ```
-    pub fn reset(&mut self, config: Config) -> Result<(), crate::Error> {
+    pub fn reset(&mut self, config: Config) -> Result<(), Error> {
         config.validate()?;
         self.config = config;
         self.voxels.clear();

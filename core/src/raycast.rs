@@ -22,10 +22,10 @@
 
 use crate::block::bits;
 use crate::dda::Dda;
+use crate::error::Error;
 use crate::integrate::{floor_abs, Pinhole};
-use crate::key::{hash, VoxelKey};
+use crate::key::{hash, VoxelKey, KEY_LIMIT};
 use crate::map::{argmax, Map};
-use crate::Error;
 use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 
 #[cfg(test)]
@@ -219,7 +219,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             self.examine_box(s, &mut ray, k.map(|v| v - 1), k.map(|v| v + 1));
         }
         // No ray can walk farther than across the whole key range.
-        let max_t = max_t.min(h * 4.0 * (crate::KEY_LIMIT + 1) as f32);
+        let max_t = max_t.min(h * 4.0 * (KEY_LIMIT + 1) as f32);
         let max_steps = ((max_t / h) as u32).saturating_mul(3).saturating_add(12);
         let reach = 2.5 * h;
         for _ in 0..max_steps {

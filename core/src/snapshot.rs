@@ -22,12 +22,12 @@
 use crate::block::Block;
 use crate::config::{Config, MissModel};
 use crate::crc::{crc32, Crc};
+use crate::error::Error;
+use crate::integrate::MAX_VOTE_EXPONENT;
 use crate::key::{order, KEY_LIMIT};
-use crate::map::Map;
+use crate::map::{Map, MapStats};
 use crate::table::Entry;
 use crate::voxel::{split_key, Voxel, EXPONENT_SHIFT};
-use crate::Error;
-use crate::MAX_VOTE_EXPONENT;
 
 /// Snapshot format version written by this build.
 pub const SNAPSHOT_VERSION: u16 = 2;
@@ -219,7 +219,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         self.voxels.clear();
         self.blocks.clear();
         self.config = config;
-        self.stats = crate::MapStats {
+        self.stats = MapStats {
             frames,
             ..Default::default()
         };
