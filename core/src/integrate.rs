@@ -17,11 +17,13 @@ use crate::block::{bits, Block};
 use crate::config::{to_fixed, MissModel};
 use crate::dda::Dda;
 use crate::error::Error;
+use crate::gaussian::{PrepCache, Prepared};
 use crate::key::{axis_key, floor_i32, VoxelKey};
 use crate::labels::{LabeledPoint, Labels};
 use crate::map::Map;
 use crate::table::{Entry, NIL};
-use crate::voxel::{PrepCache, Prepared, Voxel, EXPONENT_SHIFT, VOTES_TAKEN_MAX};
+use crate::votes::has_vote;
+use crate::voxel::{PointSums, Voxel};
 use nalgebra::{Isometry3, Matrix3, Vector3};
 
 /// Most points one frame may hold. With `quant_bits <= 6` and `n_max <= 65535` this bounds a
@@ -200,42 +202,13 @@ struct Frame {
     head: u32,
     block_cache: (u64, usize),
     voxel_cache: (u64, usize),
-    run: Run,
+    /// Points of the current run, and the slot of the voxel they are in.
+    run: PointSums,
+    run_slot: usize,
     voxels_exhausted: bool,
     blocks_exhausted: bool,
     report: FrameReport,
     evicted_before: (u64, u64),
-}
-
-/// Sums of consecutive points that fell into the same voxel (slot), not yet added to it.
-pub(crate) struct Run {
-    pub(crate) slot: usize,
-    pub(crate) n: u32,
-    pub(crate) s1: [i32; 3],
-    pub(crate) s2: [i32; 6],
-}
-
-impl Run {
-    pub(crate) const EMPTY: Run = Run {
-        slot: usize::MAX,
-        n: 0,
-        s1: [0; 3],
-        s2: [0; 6],
-    };
-
-    #[inline]
-    pub(crate) fn add(&mut self, q: [i32; 3]) {
-        self.n += 1;
-        self.s1[0] += q[0];
-        self.s1[1] += q[1];
-        self.s1[2] += q[2];
-        self.s2[0] += q[0] * q[0];
-        self.s2[1] += q[0] * q[1];
-        self.s2[2] += q[0] * q[2];
-        self.s2[3] += q[1] * q[1];
-        self.s2[4] += q[1] * q[2];
-        self.s2[5] += q[2] * q[2];
-    }
 }
 
 impl Frame {
@@ -387,7 +360,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             head: NIL,
             block_cache: (0, 0),
             voxel_cache: (0, 0),
-            run: Run::EMPTY,
+            run: PointSums::EMPTY,
+            run_slot: usize::MAX,
             voxels_exhausted: false,
             blocks_exhausted: false,
             report: FrameReport::default(),
@@ -403,7 +377,6 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             f.report.rejected_depth += 1;
             return;
         }
-        let n = labels.len as usize;
         if !labels.fits(C) {
             f.report.rejected_label += 1;
             return;
@@ -464,35 +437,16 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 }
             }
         };
-        if f.run.slot != vs {
+        if f.run_slot != vs {
             self.flush_run(f);
-            f.run.slot = vs;
+            f.run_slot = vs;
         }
         f.voxel_cache = (packed, vs);
         f.run.add(q);
-        let votes = self.has_vote(labels);
-        let v = &mut self.voxels.slots[vs];
-        let exponent = (v.tally >> EXPONENT_SHIFT) as u8;
-        if votes && (exponent == 0 || takes_vote(vote_hash(&p), exponent)) {
-            let taken = (v.tally & VOTES_TAKEN_MAX) + 1;
-            v.tally = (v.tally & !VOTES_TAKEN_MAX) | taken.min(VOTES_TAKEN_MAX);
-            let k = (self.config.top_k as usize).min(n);
-            for i in 0..k {
-                let c = labels.classes[i] as usize;
-                if c >= 1 && labels.scores[i] >= self.config.min_score {
-                    v.hist[c - 1] = v.hist[c - 1].saturating_add(1);
-                }
-            }
+        if has_vote(labels, &self.config) {
+            self.voxels.slots[vs].vote(&p, labels, &self.config);
         }
         f.report.points_used += 1;
-    }
-
-    /// Whether any of a point's (valid) labels votes: one of its first `top_k` labels is a
-    /// class (not void) with a score of at least `min_score`.
-    #[inline]
-    fn has_vote(&self, labels: &Labels) -> bool {
-        let k = (self.config.top_k as usize).min(labels.len as usize);
-        (0..k).any(|i| labels.classes[i] >= 1 && labels.scores[i] >= self.config.min_score)
     }
 
     fn add_truncated(&mut self, f: &mut Frame, w: &[f32; 3], range: f32) {
@@ -565,11 +519,12 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// registers) to its voxel. Integer sums make this exact.
     fn flush_run(&mut self, f: &mut Frame) {
         if f.run.n > 0 {
-            if let Some(v) = self.voxels.slots.get_mut(f.run.slot) {
+            if let Some(v) = self.voxels.slots.get_mut(f.run_slot) {
                 v.merge(&f.run);
             }
         }
-        f.run = Run::EMPTY;
+        f.run = PointSums::EMPTY;
+        f.run_slot = usize::MAX;
     }
 
     fn finish(&mut self, mut f: Frame) -> FrameReport {
@@ -589,10 +544,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 if let Some(vs) = self.voxels.find(key.packed()) {
                     let v = &mut self.voxels.slots[vs];
                     v.decay(cfg.n_max);
-                    let exponent = (v.tally >> EXPONENT_SHIFT) as u8;
-                    let taken = v.tally & VOTES_TAKEN_MAX;
-                    let next = next_vote_exponent(exponent, taken, cfg.votes_per_frame);
-                    v.tally = (next as u16) << EXPONENT_SHIFT;
+                    v.end_vote_sample(cfg.votes_per_frame);
                 }
                 self.blocks.slots[bs].add_logodds(cell, hit, lo, hi);
                 f.report.end_voxels += 1;
@@ -684,7 +636,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             if let Some(vs) = self.voxels.find(key.packed()) {
                 let v = &self.voxels.slots[vs];
                 if v.n >= cfg.n_min {
-                    let g = cache.get(vs, v, cfg);
+                    let g = cache.get(vs, || v.prepared(cfg));
                     match ndt_om_miss(cfg, ray, &g) {
                         Some(l) => delta = to_fixed(l),
                         None => return,
@@ -789,63 +741,6 @@ fn each_pixel(image: &DepthImage<'_>, mut visit: impl FnMut([f32; 3], Labels)) -
     invalid
 }
 
-/// The vote-sampling hash of a point (sensor frame): a mix of its coordinates' bits, so
-/// the sample a voxel takes does not depend on point order (see
-/// [`crate::Config::votes_per_frame`]).
-///
-/// ```
-/// let h = sndt_core::vote_hash(&[0.1, -0.2, 1.5]);
-/// assert_eq!(h, sndt_core::vote_hash(&[0.1, -0.2, 1.5]));
-/// assert_ne!(h, sndt_core::vote_hash(&[0.1, -0.2, 1.5001]));
-/// ```
-pub fn vote_hash(p: &[f32; 3]) -> u32 {
-    let mut h = p[0].to_bits().wrapping_mul(0x9e37_79b1);
-    h = (h ^ p[1].to_bits()).wrapping_mul(0x85eb_ca77);
-    h = (h ^ p[2].to_bits()).wrapping_mul(0xc2b2_ae3d);
-    // murmur3's finaliser
-    h ^= h >> 16;
-    h = h.wrapping_mul(0x85eb_ca6b);
-    h ^= h >> 13;
-    h = h.wrapping_mul(0xc2b2_ae35);
-    h ^ (h >> 16)
-}
-
-/// Whether a point with sampling hash `hash` votes in a voxel whose sample keeps one voting
-/// point in `2^exponent` (`exponent <= 15`): the hash's top `exponent` bits are zero.
-///
-/// ```
-/// assert!(sndt_core::takes_vote(u32::MAX, 0));
-/// assert!(sndt_core::takes_vote(0x3fff_ffff, 2) && !sndt_core::takes_vote(0x4000_0000, 2));
-/// ```
-pub fn takes_vote(hash: u32, exponent: u8) -> bool {
-    (hash as u64) >> (32 - exponent.min(MAX_VOTE_EXPONENT) as u32) == 0
-}
-
-/// Largest vote sampling exponent (one point in 32768).
-pub const MAX_VOTE_EXPONENT: u8 = 15;
-
-/// The sampling exponent of a voxel's next frame: the smallest `k` with
-/// `taken * 2^exponent <= votes_per_frame * 2^k` (at most [`MAX_VOTE_EXPONENT`]), where
-/// `taken` votes were sampled at one in `2^exponent` this frame. So a voxel seen about as
-/// densely next frame takes between half and all of `votes_per_frame` votes.
-///
-/// ```
-/// use sndt_core::next_vote_exponent;
-/// assert_eq!(next_vote_exponent(0, 64, 64), 0);
-/// assert_eq!(next_vote_exponent(0, 65, 64), 1);
-/// assert_eq!(next_vote_exponent(2, 100, 64), 3); // about 400 voting points
-/// assert_eq!(next_vote_exponent(5, 0, 64), 0); // no votes taken: count them all
-/// ```
-pub fn next_vote_exponent(exponent: u8, taken: u16, votes_per_frame: u8) -> u8 {
-    let estimate = (taken as u64) << exponent.min(MAX_VOTE_EXPONENT);
-    let budget = votes_per_frame.max(1) as u64;
-    let mut k = 0;
-    while k < MAX_VOTE_EXPONENT && estimate > budget << k {
-        k += 1;
-    }
-    k
-}
-
 /// Exact voxel traversal (Amanatides & Woo) of the segment from `o` to `target` (voxel
 /// units) starting in voxel `start` and ending in `end`, visiting `end` only if
 /// `include_end`. Axis ties step the lowest axis first; at most the Manhattan distance
@@ -924,11 +819,6 @@ struct Ray {
     len: f32,
     /// True when the ray ends at a measured point (false for max-range truncation).
     measured: bool,
-}
-
-/// Absolute eigenvalue floor for degenerate voxels: `(h / 1000)^2`.
-pub(crate) fn floor_abs(h: f32) -> f32 {
-    (h * 1e-3) * (h * 1e-3)
 }
 
 /// NDT-OM miss log-odds for a ray through a voxel's Gaussian, or `None` when the point of

@@ -131,6 +131,17 @@ pub(crate) fn floor_i32(s: f32) -> i32 {
     i - ((i as f32 > s) as i32)
 }
 
+/// A packed key as three `u16` (how tables store it: 4-byte alignment, no padding).
+pub(crate) fn split_key(packed: u64) -> [u16; 3] {
+    [(packed >> 32) as u16, (packed >> 16) as u16, packed as u16]
+}
+
+/// The packed key stored as three `u16` by [`split_key`].
+#[inline]
+pub(crate) fn join_key(k: [u16; 3]) -> u64 {
+    ((k[0] as u64) << 32) | ((k[1] as u64) << 16) | k[2] as u64
+}
+
 fn pack(x: i32, y: i32, z: i32) -> u64 {
     let b = |v: i32| ((v + 32768) as u64) & 0xffff;
     (b(x) << 32) | (b(y) << 16) | b(z)

@@ -60,6 +60,7 @@ mod config;
 mod crc;
 mod dda;
 mod error;
+mod gaussian;
 mod integrate;
 mod key;
 mod labels;
@@ -67,6 +68,7 @@ mod map;
 mod raycast;
 mod snapshot;
 mod table;
+mod votes;
 mod voxel;
 
 #[cfg(test)]
@@ -74,9 +76,10 @@ mod tests;
 
 pub use config::{Config, MissModel, LOGODDS_ONE};
 pub use error::Error;
+pub use gaussian::Gaussian;
 pub use integrate::{
-    next_vote_exponent, pose_from_matrix, takes_vote, vote_hash, voxels_on_segment, DepthImage,
-    DepthKind, FrameReport, LabelImage, Pinhole, MAX_FRAME_POINTS, MAX_VOTE_EXPONENT,
+    pose_from_matrix, voxels_on_segment, DepthImage, DepthKind, FrameReport, LabelImage, Pinhole,
+    MAX_FRAME_POINTS,
 };
 pub use key::{VoxelKey, KEY_LIMIT};
 pub use labels::{LabeledPoint, Labels, MAX_TOP_K};
@@ -84,4 +87,4 @@ pub use map::{Map, MapStats, Occupancy, VoxelView, BLOCK_BYTES, MAP_HEADER_BYTES
 pub use nalgebra::{Isometry3, Matrix3, Point3, Translation3, UnitQuaternion, Vector3};
 pub use raycast::{RayHit, INVALID_LABEL};
 pub use snapshot::{SNAPSHOT_BLOCK_BYTES, SNAPSHOT_HEADER_BYTES, SNAPSHOT_VERSION};
-pub use voxel::Gaussian;
+pub use votes::{next_vote_exponent, takes_vote, vote_hash, MAX_VOTE_EXPONENT};

@@ -3,9 +3,10 @@
 use crate::block::{bits, Block};
 use crate::config::{Config, MissModel, LOGODDS_ONE};
 use crate::error::Error;
+use crate::gaussian::Gaussian;
 use crate::key::VoxelKey;
 use crate::table::{Entry, Table};
-use crate::voxel::{Gaussian, Voxel};
+use crate::voxel::{argmax, Voxel};
 
 /// Bytes of one occupancy block (64 voxels) in the block table, hash index included.
 pub const BLOCK_BYTES: usize = core::mem::size_of::<Block>();
@@ -72,22 +73,6 @@ impl<const C: usize> VoxelView<'_, C> {
     /// Occupancy state.
     pub fn occupancy(&self) -> Occupancy {
         state(self.log_odds)
-    }
-}
-
-pub(crate) fn argmax(hist: &[u8]) -> Option<(u8, f32)> {
-    let mut best = 0usize;
-    let mut total = 0u32;
-    for (i, &b) in hist.iter().enumerate() {
-        total += b as u32;
-        if b > hist[best] {
-            best = i;
-        }
-    }
-    if total == 0 {
-        None
-    } else {
-        Some((best as u8 + 1, hist[best] as f32 / total as f32))
     }
 }
 

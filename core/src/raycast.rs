@@ -23,9 +23,10 @@
 use crate::block::bits;
 use crate::dda::Dda;
 use crate::error::Error;
-use crate::integrate::{floor_abs, Pinhole};
+use crate::integrate::Pinhole;
 use crate::key::{hash, VoxelKey, KEY_LIMIT};
-use crate::map::{argmax, Map};
+use crate::map::Map;
+use crate::voxel::argmax;
 use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 
 #[cfg(test)]
@@ -453,9 +454,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         if v.n < cfg.n_min {
             return p;
         }
-        let g = v
-            .gaussian(cfg.cell_size, cfg.quant_step())
-            .prepare(cfg.eigen_ratio, floor_abs(cfg.cell_size));
+        let g = v.prepared(cfg);
         p.d = origin - g.mean;
         p.inv = g.inv;
         p.c = p.d.dot(&(g.inv * p.d));

@@ -6,10 +6,11 @@ extern crate std;
 use super::{RayHit, INVALID_LABEL};
 use crate::block::Block;
 use crate::dda::Dda;
+use crate::gaussian::PrepCache;
 use crate::key::VoxelKey;
-use crate::map::{argmax, Map};
+use crate::map::Map;
 use crate::table::Table;
-use crate::voxel::PrepCache;
+use crate::voxel::argmax;
 use crate::*;
 use std::boxed::Box;
 use std::vec::Vec;
@@ -126,7 +127,7 @@ fn reference_examine<const V: usize, const B: usize, const C: usize, const N: us
     if v.n < cfg.n_min {
         return;
     }
-    let g = p.cache.get(vs, v, cfg);
+    let g = p.cache.get(vs, || v.prepared(cfg));
     let d = p.origin - g.mean;
     let w = g.inv * p.u;
     let a = p.u.dot(&w);

@@ -23,11 +23,11 @@ use crate::block::Block;
 use crate::config::{Config, MissModel};
 use crate::crc::{crc32, Crc};
 use crate::error::Error;
-use crate::integrate::MAX_VOTE_EXPONENT;
-use crate::key::{order, KEY_LIMIT};
+use crate::key::{join_key, order, split_key, KEY_LIMIT};
 use crate::map::{Map, MapStats};
 use crate::table::Entry;
-use crate::voxel::{split_key, Voxel, EXPONENT_SHIFT};
+use crate::votes::MAX_VOTE_EXPONENT;
+use crate::voxel::Voxel;
 
 /// Snapshot format version written by this build.
 pub const SNAPSHOT_VERSION: u16 = 2;
@@ -85,8 +85,7 @@ impl Reader<'_> {
         u64::from_le_bytes(self.take())
     }
     fn key(&mut self) -> u64 {
-        let k = [self.u16(), self.u16(), self.u16()];
-        ((k[0] as u64) << 32) | ((k[1] as u64) << 16) | k[2] as u64
+        join_key([self.u16(), self.u16(), self.u16()])
     }
 }
 
@@ -245,7 +244,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             for x in v.s2.iter_mut() {
                 *x = r.i32();
             }
-            v.tally = (r.u8() as u16) << EXPONENT_SHIFT;
+            v.start_vote_sample(r.u8());
             for x in v.hist.iter_mut() {
                 *x = r.u8();
             }
@@ -468,6 +467,6 @@ fn voxel_record_head<const C: usize>(v: &Voxel<C>, out: &mut [u8; 160]) -> usize
     for x in v.s1.iter().chain(v.s2.iter()) {
         w.put(&x.to_le_bytes());
     }
-    w.put(&[(v.tally >> EXPONENT_SHIFT) as u8]);
+    w.put(&[v.vote_exponent()]);
     w.pos
 }

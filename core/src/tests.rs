@@ -12,11 +12,11 @@ extern crate std;
 use crate::block::Block;
 use crate::config::to_fixed;
 use crate::crc::crc32;
-use crate::integrate::floor_abs;
+use crate::gaussian::{floor_abs, symmetric_eigen};
 use crate::key::{hash, order};
-use crate::map::argmax;
 use crate::table::{Entry, Table};
-use crate::voxel::{symmetric_eigen, Voxel};
+use crate::voxel::argmax;
+use crate::voxel::Voxel;
 use crate::*;
 use std::vec::Vec;
 
@@ -921,7 +921,7 @@ fn key_pack_block_cell_round_trips() {
             cell,
             (k.x.rem_euclid(4) + 4 * k.y.rem_euclid(4) + 16 * k.z.rem_euclid(4)) as u32
         );
-        assert_eq!(crate::voxel::split_key(p), entry(k).key);
+        assert_eq!(crate::key::split_key(p), entry(k).key);
     }
     assert_eq!(key(-32767, 0, 5).chebyshev(&key(32767, 1, -5)), 65534);
     assert_eq!(key(1, 2, 3).chebyshev(&key(1, 2, 3)), 0);
