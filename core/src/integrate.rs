@@ -14,6 +14,7 @@
 //!    most one miss.
 
 use crate::block::{bits, Block};
+use crate::camera::{validate_pose, DepthImage};
 use crate::config::{to_fixed, MissModel};
 use crate::dda::Dda;
 use crate::error::Error;
@@ -61,123 +62,6 @@ pub struct FrameReport {
     pub voxels_evicted: u32,
     /// Occupancy blocks evicted to make room.
     pub blocks_evicted: u32,
-}
-
-/// Pinhole intrinsics in pixels, OpenCV camera axes (x right, y down, z forward). Pixel
-/// `(col, row)` has its centre at `(col + 0.5, row + 0.5)`, so a centred principal point is
-/// `cx = width / 2`.
-///
-/// ```
-/// let cam = sndt_core::Pinhole { fx: 100.0, fy: 100.0, cx: 2.0, cy: 2.0, width: 4, height: 4 };
-/// assert_eq!(cam.ray(2, 1), [0.005, -0.005, 1.0]);
-/// ```
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Pinhole {
-    /// Focal length along x, pixels.
-    pub fx: f32,
-    /// Focal length along y, pixels.
-    pub fy: f32,
-    /// Principal point x, pixels.
-    pub cx: f32,
-    /// Principal point y, pixels.
-    pub cy: f32,
-    /// Image width.
-    pub width: u32,
-    /// Image height.
-    pub height: u32,
-}
-
-impl Pinhole {
-    /// Direction of the pixel's centre ray with unit z.
-    pub fn ray(&self, col: u32, row: u32) -> [f32; 3] {
-        [
-            (col as f32 + 0.5 - self.cx) / self.fx,
-            (row as f32 + 0.5 - self.cy) / self.fy,
-            1.0,
-        ]
-    }
-
-    pub(crate) fn valid(&self) -> bool {
-        let ok = |f: f32| f.is_finite() && f > 0.0;
-        ok(self.fx) && ok(self.fy) && self.cx.is_finite() && self.cy.is_finite()
-    }
-
-    /// `width * height`, or `None` when it overflows `usize` (16-bit/32-bit targets).
-    pub(crate) fn pixels(&self) -> Option<usize> {
-        (self.width as usize).checked_mul(self.height as usize)
-    }
-}
-
-/// What a depth value means.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum DepthKind {
-    /// Distance along the optical axis (z), as in most depth cameras.
-    Planar,
-    /// Euclidean distance from the optical centre (Hypersim `depth_meters`).
-    Range,
-}
-
-/// Per-pixel labels of a depth image.
-#[derive(Clone, Copy, Debug)]
-pub enum LabelImage<'a> {
-    /// No labels: geometry only.
-    None,
-    /// One class id per pixel (0 = void).
-    Top1(&'a [u8]),
-    /// Top-k labels per pixel.
-    TopK(&'a [Labels]),
-}
-
-/// A depth image with labels, row-major, `width * height` entries each.
-///
-/// ```
-/// use sndt_core::*;
-/// let cam = Pinhole { fx: 4.0, fy: 4.0, cx: 4.0, cy: 3.0, width: 8, height: 6 };
-/// let depth = [2.0f32; 48];
-/// let labels = [1u8; 48];
-/// let img = DepthImage { camera: cam, depth: &depth, kind: DepthKind::Planar,
-///                        labels: LabelImage::Top1(&labels), stride: 1 };
-/// let mut map: Map<256, 64, 40> = Map::new(Config::DEFAULT);
-/// let r = map.integrate_depth(&Isometry3::identity(), &img).unwrap();
-/// assert_eq!(r.points_used, 48);
-/// ```
-#[derive(Clone, Copy, Debug)]
-pub struct DepthImage<'a> {
-    /// Intrinsics and size.
-    pub camera: Pinhole,
-    /// Depth in metres; 0, negative, NaN or inf = invalid.
-    pub depth: &'a [f32],
-    /// Planar depth or Euclidean range.
-    pub kind: DepthKind,
-    /// Labels.
-    pub labels: LabelImage<'a>,
-    /// Use every `stride`-th pixel in both directions (1 = all).
-    pub stride: u32,
-}
-
-/// Builds a pose from a rotation matrix and translation, checking that the rotation is
-/// orthonormal with determinant +1 (within 1e-3) and everything is finite.
-///
-/// ```
-/// use sndt_core::{pose_from_matrix, Matrix3, Vector3, Error};
-/// assert!(pose_from_matrix(&Matrix3::identity(), &Vector3::zeros()).is_ok());
-/// let sheared = Matrix3::new(1.0, 0.2, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0);
-/// assert_eq!(pose_from_matrix(&sheared, &Vector3::zeros()), Err(Error::InvalidPose));
-/// ```
-pub fn pose_from_matrix(r: &Matrix3<f32>, t: &Vector3<f32>) -> Result<Isometry3<f32>, Error> {
-    if r.iter().chain(t.iter()).any(|x| !x.is_finite()) {
-        return Err(Error::InvalidPose);
-    }
-    let rtr = r.transpose() * r;
-    let off = (rtr - Matrix3::identity()).abs().max();
-    if off > 1e-3 || r.determinant() < 0.0 {
-        return Err(Error::InvalidPose);
-    }
-    let rot = nalgebra::Rotation3::from_matrix_unchecked(*r);
-    let q = nalgebra::UnitQuaternion::from_rotation_matrix(&rot);
-    Ok(Isometry3::from_parts(nalgebra::Translation3::from(*t), q))
 }
 
 /// Per-frame state; lives on the stack during one integration.
@@ -294,33 +178,18 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         pose: &Isometry3<f32>,
         image: &DepthImage<'_>,
     ) -> Result<FrameReport, Error> {
-        let cam = &image.camera;
-        let n = cam.pixels().ok_or(Error::InvalidImage)?;
-        let labels_ok = match image.labels {
-            LabelImage::None => true,
-            LabelImage::Top1(l) => l.len() == n,
-            LabelImage::TopK(l) => l.len() == n,
-        };
-        if !cam.valid() || image.depth.len() != n || !labels_ok || image.stride == 0 {
-            return Err(Error::InvalidImage);
-        }
-        let stride = image.stride as usize;
-        let (w, h) = (cam.width as usize, cam.height as usize);
-        if w.div_ceil(stride) * h.div_ceil(stride) > MAX_FRAME_POINTS {
+        image.validate()?;
+        if image.samples() > MAX_FRAME_POINTS {
             return Err(Error::FrameTooLarge);
         }
         let mut f = self.begin(pose)?;
-        f.report.rejected_depth += each_pixel(image, |p, l| self.add_point(&mut f, p, &l));
+        f.report.rejected_depth += image.for_each_point(|p, l| self.add_point(&mut f, p, &l));
         Ok(self.finish(f))
     }
 
     fn begin(&mut self, pose: &Isometry3<f32>) -> Result<Frame, Error> {
+        validate_pose(pose)?;
         let t = pose.translation.vector;
-        let q = pose.rotation.quaternion();
-        let finite = t.iter().chain(q.coords.iter()).all(|x| x.is_finite());
-        if !finite || (q.norm_squared() - 1.0).abs() > 1e-3 {
-            return Err(Error::InvalidPose);
-        }
         let h = self.config.cell_size;
         let origin = [t.x, t.y, t.z];
         let inv_h = 1.0 / h;
@@ -706,39 +575,6 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             insize *= 2;
         }
     }
-}
-
-/// Calls `visit` with every valid pixel's point (sensor frame) and labels, in row-major
-/// order at the image's stride; returns how many pixels had an invalid depth.
-fn each_pixel(image: &DepthImage<'_>, mut visit: impl FnMut([f32; 3], Labels)) -> u32 {
-    let cam = &image.camera;
-    let stride = image.stride as usize;
-    let (w, h) = (cam.width as usize, cam.height as usize);
-    let (ifx, ify) = (1.0 / cam.fx, 1.0 / cam.fy);
-    let mut invalid = 0;
-    for row in (0..h).step_by(stride) {
-        let ry = (row as f32 + 0.5 - cam.cy) * ify;
-        for col in (0..w).step_by(stride) {
-            let i = row * w + col;
-            let d = image.depth[i];
-            if !(d.is_finite() && d > 0.0) {
-                invalid += 1;
-                continue;
-            }
-            let r = [(col as f32 + 0.5 - cam.cx) * ifx, ry, 1.0];
-            let scale = match image.kind {
-                DepthKind::Planar => d,
-                DepthKind::Range => d / libm::sqrtf(r[0] * r[0] + r[1] * r[1] + 1.0),
-            };
-            let labels = match image.labels {
-                LabelImage::None => Labels::NONE,
-                LabelImage::Top1(l) => Labels::top1(l[i]),
-                LabelImage::TopK(l) => l[i],
-            };
-            visit([r[0] * scale, r[1] * scale, scale], labels);
-        }
-    }
-    invalid
 }
 
 /// Exact voxel traversal (Amanatides & Woo) of the segment from `o` to `target` (voxel

@@ -56,6 +56,7 @@
 #![deny(missing_docs)]
 
 mod block;
+mod camera;
 mod config;
 mod crc;
 mod dda;
@@ -74,13 +75,13 @@ mod voxel;
 #[cfg(test)]
 mod tests;
 
+pub use camera::{
+    depth_point, pose_from_matrix, validate_pose, DepthImage, DepthKind, LabelImage, Pinhole,
+};
 pub use config::{Config, MissModel, LOGODDS_ONE};
 pub use error::Error;
 pub use gaussian::Gaussian;
-pub use integrate::{
-    pose_from_matrix, voxels_on_segment, DepthImage, DepthKind, FrameReport, LabelImage, Pinhole,
-    MAX_FRAME_POINTS,
-};
+pub use integrate::{voxels_on_segment, FrameReport, MAX_FRAME_POINTS};
 pub use key::{VoxelKey, KEY_LIMIT};
 pub use labels::{LabeledPoint, Labels, MAX_TOP_K};
 pub use map::{Map, MapStats, Occupancy, VoxelView, BLOCK_BYTES, MAP_HEADER_BYTES};

@@ -21,9 +21,9 @@
 //! * pixels are rendered in 8x8 tiles, whose rays visit nearly the same voxels.
 
 use crate::block::bits;
+use crate::camera::{validate_pose, Pinhole};
 use crate::dda::Dda;
 use crate::error::Error;
-use crate::integrate::Pinhole;
 use crate::key::{hash, VoxelKey, KEY_LIMIT};
 use crate::map::Map;
 use crate::voxel::argmax;
@@ -499,13 +499,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         if !camera.valid() || labels.len() != n || distance.len() != n {
             return Err(Error::InvalidImage);
         }
+        validate_pose(pose)?;
         let t = pose.translation.vector;
-        let q = pose.rotation.quaternion();
-        if !t.iter().chain(q.coords.iter()).all(|x| x.is_finite())
-            || (q.norm_squared() - 1.0).abs() > 1e-3
-        {
-            return Err(Error::InvalidPose);
-        }
         let rot = pose.rotation.to_rotation_matrix();
         let origin = Point3::from(t);
         let (w, h) = (camera.width, camera.height);
