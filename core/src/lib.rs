@@ -61,6 +61,7 @@ mod config;
 mod crc;
 mod dda;
 mod error;
+mod evict;
 mod gaussian;
 mod integrate;
 mod key;
