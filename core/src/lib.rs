@@ -55,6 +55,7 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+mod accumulate;
 mod block;
 mod camera;
 mod config;
@@ -62,6 +63,8 @@ mod crc;
 mod dda;
 mod error;
 mod evict;
+mod frame;
+mod free_space;
 mod gaussian;
 mod integrate;
 mod key;
@@ -81,8 +84,9 @@ pub use camera::{
 };
 pub use config::{Config, MissModel, LOGODDS_ONE};
 pub use error::Error;
+pub use frame::{FrameReport, MAX_FRAME_POINTS};
+pub use free_space::voxels_on_segment;
 pub use gaussian::Gaussian;
-pub use integrate::{voxels_on_segment, FrameReport, MAX_FRAME_POINTS};
 pub use key::{VoxelKey, KEY_LIMIT};
 pub use labels::{LabeledPoint, Labels, MAX_TOP_K};
 pub use map::{Map, MapStats, Occupancy, VoxelView, BLOCK_BYTES, MAP_HEADER_BYTES};
