@@ -3,12 +3,13 @@
 
 extern crate std;
 
-use super::{RayHit, INVALID_LABEL};
+use super::RayHit;
 use crate::block::Block;
 use crate::dda::Dda;
 use crate::gaussian::PrepCache;
 use crate::key::VoxelKey;
 use crate::map::Map;
+use crate::render::INVALID_LABEL;
 use crate::table::Table;
 use crate::voxel::argmax;
 use crate::*;
