@@ -20,14 +20,14 @@
 //! equal bytes whatever order they were built in, and duplicates are detectable.
 
 use crate::block::Block;
-use crate::config::{Config, MissModel};
+use crate::config::{to_fixed, Config, MissModel};
 use crate::crc::{crc32, Crc};
 use crate::error::Error;
-use crate::key::{join_key, order, split_key, KEY_LIMIT};
+use crate::key::{join_key, order, split_key, VoxelKey, KEY_LIMIT};
 use crate::map::{Map, MapStats};
 use crate::table::Entry;
 use crate::votes::MAX_VOTE_EXPONENT;
-use crate::voxel::Voxel;
+use crate::voxel::{scatter, Voxel};
 
 /// Snapshot format version written by this build.
 pub const SNAPSHOT_VERSION: u16 = 2;
@@ -253,8 +253,25 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         Ok(())
     }
 
-    /// Checks a snapshot completely without touching the map.
+    /// Checks a snapshot completely without touching the map, in this order: header
+    /// (length, magic, version, class count, reserved bytes), total length, CRC, capacity,
+    /// config, then every block and voxel record.
     fn validate_snapshot(buf: &[u8]) -> Result<(Config, u32, usize, usize), Error> {
+        let h = Self::read_header(buf)?;
+        Self::check_body(buf, &h)?;
+        let config = h.checked_config()?;
+        let mut r = Reader {
+            buf,
+            pos: SNAPSHOT_HEADER_BYTES,
+        };
+        check_blocks(&mut r, h.blocks, h.voxels, &config)?;
+        Self::check_voxels(&mut r, h.blocks, h.voxels, &config)?;
+        Ok((config, h.frames, h.blocks, h.voxels))
+    }
+
+    /// The header fields, after checking the magic, version, class count and reserved
+    /// bytes.
+    fn read_header(buf: &[u8]) -> Result<Header, Error> {
         if buf.len() < SNAPSHOT_HEADER_BYTES + 4 {
             return Err(Error::SnapshotTruncated);
         }
@@ -269,33 +286,23 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             return Err(Error::SnapshotClasses);
         }
         let _writer_capacity = (r.u32(), r.u32());
-        let mut c = Config::DEFAULT;
-        c.cell_size = r.f32();
-        c.eigen_ratio = r.f32();
-        c.hit = r.f32();
-        c.miss = r.f32();
-        c.clamp_min = r.f32();
-        c.clamp_max = r.f32();
-        c.lambda = r.f32();
-        c.noise_base = r.f32();
-        c.noise_quadratic = r.f32();
-        c.max_range = r.f32();
-        c.render_radius = r.f32();
-        c.n_min = r.u32();
-        c.n_max = r.u32();
-        c.quant_bits = r.u8();
-        c.top_k = r.u8();
-        c.min_score = r.u8();
-        let model = r.u8();
-        c.votes_per_frame = r.u8();
+        let (config, model) = read_config(&mut r);
         if r.take::<3>() != [0; 3] {
             return Err(Error::SnapshotCorrupt); // reserved bytes
         }
-        let frames = r.u32();
-        let nb = r.u32() as usize;
-        let nv = r.u32() as usize;
-        let expect = (nb as u64) * SNAPSHOT_BLOCK_BYTES as u64
-            + (nv as u64) * Self::SNAPSHOT_VOXEL_BYTES as u64
+        Ok(Header {
+            config,
+            model,
+            frames: r.u32(),
+            blocks: r.u32() as usize,
+            voxels: r.u32() as usize,
+        })
+    }
+
+    /// The length the header implies, the CRC, and this map's capacity.
+    fn check_body(buf: &[u8], h: &Header) -> Result<(), Error> {
+        let expect = (h.blocks as u64) * SNAPSHOT_BLOCK_BYTES as u64
+            + (h.voxels as u64) * Self::SNAPSHOT_VOXEL_BYTES as u64
             + SNAPSHOT_HEADER_BYTES as u64
             + 4;
         if buf.len() as u64 != expect {
@@ -306,65 +313,15 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         if crc32(&buf[..body]) != stored {
             return Err(Error::SnapshotChecksum);
         }
-        if nb > B || nv > V {
+        if h.blocks > B || h.voxels > V {
             return Err(Error::SnapshotCapacity);
         }
-        c.miss_model = match model {
-            0 => MissModel::NdtOm,
-            1 => MissModel::Constant,
-            _ => return Err(Error::SnapshotCorrupt),
-        };
-        c.validate().map_err(|_| Error::SnapshotCorrupt)?;
-        let (lo, hi) = (
-            crate::config::to_fixed(c.clamp_min),
-            crate::config::to_fixed(c.clamp_max),
-        );
+        Ok(())
+    }
 
-        // Blocks: strictly increasing canonical order, valid keys, clamped log-odds.
-        let block_key_ok = |k: u64| {
-            (0..3).all(|i| {
-                let v = ((k >> (32 - 16 * i)) & 0xffff) as i32 - 32768;
-                (-(KEY_LIMIT + 1) / 4..=KEY_LIMIT / 4).contains(&v)
-            })
-        };
-        let mut last = None;
-        let mut surface_bits = 0usize;
-        for _ in 0..nb {
-            let k = r.key();
-            if !block_key_ok(k) || last.is_some_and(|l| l >= order(k)) {
-                return Err(Error::SnapshotCorrupt);
-            }
-            last = Some(order(k));
-            // Blocks at coordinate -8192 hold one layer of cells at key -32768, outside
-            // the key range: those cells must stay empty.
-            let mut outside = 0u64;
-            for axis in 0..3 {
-                if ((k >> (32 - 16 * axis)) & 0xffff) as i32 - 32768 == -(KEY_LIMIT + 1) / 4 {
-                    for cell in 0..64u32 {
-                        if (cell >> (2 * axis)) & 3 == 0 {
-                            outside |= 1 << cell;
-                        }
-                    }
-                }
-            }
-            for cell in 0..64 {
-                let l = r.i16() as i32;
-                if l < lo || l > hi || (l != 0 && outside & (1 << cell) != 0) {
-                    return Err(Error::SnapshotCorrupt);
-                }
-            }
-            let surface = r.u64();
-            if surface & outside != 0 {
-                return Err(Error::SnapshotCorrupt);
-            }
-            surface_bits += surface.count_ones() as usize;
-        }
-        if surface_bits != nv {
-            return Err(Error::SnapshotCorrupt);
-        }
-
-        // Voxels: strictly increasing canonical order, valid keys and sums, and each one's
-        // surface bit set in its block.
+    /// Voxel records: strictly increasing canonical order, valid keys, counts and sums,
+    /// and each one's surface bit set in its block.
+    fn check_voxels(r: &mut Reader, nb: usize, nv: usize, c: &Config) -> Result<(), Error> {
         let qhalf = 1i64 << (c.quant_bits - 1);
         let mut last = None;
         for _ in 0..nv {
@@ -379,7 +336,6 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             if n == 0 || n > c.n_max {
                 return Err(Error::SnapshotCorrupt);
             }
-            let n = n as i64;
             let mut s1 = [0i64; 3];
             for x in s1.iter_mut() {
                 *x = r.i32() as i64;
@@ -392,34 +348,15 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 return Err(Error::SnapshotCorrupt);
             }
             r.pos += C; // any histogram is valid
-            let bound1 = n * qhalf;
-            let bound2 = n * qhalf * qhalf;
-            if s1.iter().any(|x| x.abs() > bound1) || s2.iter().any(|x| x.abs() > bound2) {
+            if !sums_possible(n as i64, &s1, &s2, qhalf) {
                 return Err(Error::SnapshotCorrupt);
             }
-            // Sums of real points give a positive semi-definite scatter matrix
-            // M = n S2 - S1 S1^T. Decay rounds each scaled sum on its own, which can push M
-            // below that by about n (qhalf + 1/2) per entry (and new points can at most
-            // double it before the next decay), so allow a slack of 2 n (qhalf + 1):
-            // anything beyond cannot come from this map.
-            let m = crate::voxel::scatter(n, &s1, &s2).map(|x| x as i128);
-            let slack = 2 * n as i128 * (qhalf as i128 + 1);
-            let (dx, dy, dz) = (m[0] + slack, m[3] + slack, m[5] + slack);
-            if dx < 0
-                || dy < 0
-                || dz < 0
-                || m[1] * m[1] > dx * dy
-                || m[2] * m[2] > dx * dz
-                || m[4] * m[4] > dy * dz
-            {
-                return Err(Error::SnapshotCorrupt);
-            }
-            let key = crate::key::VoxelKey::unpack(k);
-            if !Self::surface_bit_set(buf, nb, key.block(), key.cell()) {
+            let key = VoxelKey::unpack(k);
+            if !Self::surface_bit_set(r.buf, nb, key.block(), key.cell()) {
                 return Err(Error::SnapshotCorrupt);
             }
         }
-        Ok((c, frames, nb, nv))
+        Ok(())
     }
 
     /// Binary search of the (canonically sorted) block records for a surface bit.
@@ -469,4 +406,132 @@ fn voxel_record_head<const C: usize>(v: &Voxel<C>, out: &mut [u8; 160]) -> usize
     }
     w.put(&[v.vote_exponent()]);
     w.pos
+}
+
+/// Header fields of a snapshot being read.
+struct Header {
+    /// The config as stored, its miss model not yet decoded.
+    config: Config,
+    /// The stored miss model byte.
+    model: u8,
+    frames: u32,
+    blocks: usize,
+    voxels: usize,
+}
+
+impl Header {
+    /// The stored config with its miss model, if it is a valid config.
+    fn checked_config(&self) -> Result<Config, Error> {
+        let mut c = self.config;
+        c.miss_model = match self.model {
+            0 => MissModel::NdtOm,
+            1 => MissModel::Constant,
+            _ => return Err(Error::SnapshotCorrupt),
+        };
+        c.validate().map_err(|_| Error::SnapshotCorrupt)?;
+        Ok(c)
+    }
+}
+
+/// The config fields in the order [`Map::write_snapshot`] writes them, and the miss model
+/// byte (decoded by [`Header::checked_config`]).
+fn read_config(r: &mut Reader) -> (Config, u8) {
+    let mut c = Config::DEFAULT;
+    c.cell_size = r.f32();
+    c.eigen_ratio = r.f32();
+    c.hit = r.f32();
+    c.miss = r.f32();
+    c.clamp_min = r.f32();
+    c.clamp_max = r.f32();
+    c.lambda = r.f32();
+    c.noise_base = r.f32();
+    c.noise_quadratic = r.f32();
+    c.max_range = r.f32();
+    c.render_radius = r.f32();
+    c.n_min = r.u32();
+    c.n_max = r.u32();
+    c.quant_bits = r.u8();
+    c.top_k = r.u8();
+    c.min_score = r.u8();
+    let model = r.u8();
+    c.votes_per_frame = r.u8();
+    (c, model)
+}
+
+/// Block records: strictly increasing canonical order, valid keys, log-odds within the
+/// clamps, nothing in cells outside the key range, and one surface bit per voxel record.
+fn check_blocks(r: &mut Reader, nb: usize, nv: usize, c: &Config) -> Result<(), Error> {
+    let (lo, hi) = (to_fixed(c.clamp_min), to_fixed(c.clamp_max));
+    let block_key_ok = |k: u64| {
+        (0..3).all(|i| {
+            let v = ((k >> (32 - 16 * i)) & 0xffff) as i32 - 32768;
+            (-(KEY_LIMIT + 1) / 4..=KEY_LIMIT / 4).contains(&v)
+        })
+    };
+    let mut last = None;
+    let mut surface_bits = 0usize;
+    for _ in 0..nb {
+        let k = r.key();
+        if !block_key_ok(k) || last.is_some_and(|l| l >= order(k)) {
+            return Err(Error::SnapshotCorrupt);
+        }
+        last = Some(order(k));
+        let outside = cells_outside_key_range(k);
+        for cell in 0..64 {
+            let l = r.i16() as i32;
+            if l < lo || l > hi || (l != 0 && outside & (1 << cell) != 0) {
+                return Err(Error::SnapshotCorrupt);
+            }
+        }
+        let surface = r.u64();
+        if surface & outside != 0 {
+            return Err(Error::SnapshotCorrupt);
+        }
+        surface_bits += surface.count_ones() as usize;
+    }
+    if surface_bits != nv {
+        return Err(Error::SnapshotCorrupt);
+    }
+    Ok(())
+}
+
+/// Cells of packed block `k` outside the key range: blocks at coordinate -8192 hold one
+/// layer of cells at key -32768 (one below `-KEY_LIMIT`), which must stay empty.
+fn cells_outside_key_range(k: u64) -> u64 {
+    let mut outside = 0u64;
+    for axis in 0..3 {
+        if ((k >> (32 - 16 * axis)) & 0xffff) as i32 - 32768 == -(KEY_LIMIT + 1) / 4 {
+            for cell in 0..64u32 {
+                if (cell >> (2 * axis)) & 3 == 0 {
+                    outside |= 1 << cell;
+                }
+            }
+        }
+    }
+    outside
+}
+
+/// Whether sums `n, S1, S2` can come from points of this map: each within `n` times its
+/// largest offset, and a scatter matrix that is positive semi-definite up to the slack
+/// decay's rounding allows.
+fn sums_possible(n: i64, s1: &[i64; 3], s2: &[i64; 6], qhalf: i64) -> bool {
+    let bound1 = n * qhalf;
+    let bound2 = n * qhalf * qhalf;
+    if s1.iter().any(|x| x.abs() > bound1) || s2.iter().any(|x| x.abs() > bound2) {
+        return false;
+    }
+    // Sums of real points give a positive semi-definite scatter matrix
+    // M = n S2 - S1 S1^T. Decay rounds each scaled sum on its own, which can push M
+    // below that by about n (qhalf + 1/2) per entry (and new points can at most
+    // double it before the next decay), so allow a slack of 2 n (qhalf + 1):
+    // anything beyond cannot come from this map.
+    let m = scatter(n, s1, s2).map(|x| x as i128);
+    let slack = 2 * n as i128 * (qhalf as i128 + 1);
+    let (dx, dy, dz) = (m[0] + slack, m[3] + slack, m[5] + slack);
+    !(dx < 0
+        || dy < 0
+        || dz < 0
+        || m[1] * m[1] > dx * dy
+        || m[2] * m[2] > dx * dz
+        || m[4] * m[4] > dy * dz)
 }
