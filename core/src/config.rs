@@ -82,7 +82,7 @@ pub struct Config {
     /// keep more of each frame and still let a close view (more points) outweigh a
     /// distant one, whose segmentation is usually worse. On the synthetic split with
     /// predicted labels at 10 cm (`sndt map synthetic:6:20 --labels pred
-    /// --votes-per-frame N`), larger was better (README "Design decisions").
+    /// --votes-per-frame N`), larger was better.
     pub votes_per_frame: u8,
     /// Free-space model. Default [`MissModel::NdtOm`].
     pub miss_model: MissModel,

@@ -2,10 +2,17 @@
 //!
 //! Slots live in one array; the `head` field of slot `b` holds `slot + 1` of the first entry
 //! of bucket `b` (0 = empty; it belongs to the bucket, not to the entry in the slot, so the
-//! index costs exactly 4 bytes per slot) and entries chain through their own `chain` field, kept sorted in the
-//! canonical order `(hash, key)` so that iteration by bucket is independent of insertion
-//! order. Removed slots go on a free list, so indices of live entries never move. An
-//! all-zero table is a valid empty table (statics land in `.bss`).
+//! index costs exactly 4 bytes per slot) and entries chain through their own `chain` field,
+//! kept sorted in the canonical order `(hash, key)` so that iteration by bucket is
+//! independent of insertion order. Removed slots go on a free list, so indices of live
+//! entries never move. An all-zero table is a valid empty table (statics land in `.bss`).
+//!
+//! Why not `heapless::IndexMap`: it removes by moving the last entry into the hole, so slot
+//! indices (held by blocks, caches and the frame list) would move, and it iterates in
+//! insertion order, where snapshots need an order that depends on the keys alone. Its
+//! capacity must also be a power of two of at most 2^16 (indices are `u16`; maps on a
+//! host hold 2^19 voxels), and an all-zero `IndexMap` is not a valid empty one, so a map
+//! `static` would need a copy in flash instead of landing in `.bss`.
 
 use crate::key::{hash, order};
 
