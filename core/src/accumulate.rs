@@ -158,3 +158,114 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         Some(vs)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use crate::testutil::*;
+    use crate::*;
+    use std::vec::Vec;
+
+    #[test]
+    fn integrated_gaussian_exact_for_known_quanta() {
+        // h = 1/8 and points on binary fractions: every quantised offset is known exactly
+        // (a quarter quantum above the quantum's centre, far from any rounding tie).
+        let h = 0.125f32;
+        let mut cfg = Config::with_cell_size(h);
+        cfg.n_max = 65535;
+        let mut map: Map<16, 16, 2> = Map::try_new(cfg).unwrap();
+        let k = key(-3, 5, 12);
+        let qs = [
+            [-20, 3, 0],
+            [7, -9, 14],
+            [31, 31, -31],
+            [0, 0, 1],
+            [-32, 12, 5],
+        ];
+        let pts: Vec<_> = qs
+            .iter()
+            .map(|q| {
+                let c = |ki: i16, qi: i32| (ki as f32 * 64.0 + 32.0 + qi as f32 + 0.25) / 512.0;
+                lp(c(k.x, q[0]), c(k.y, q[1]), c(k.z, q[2]), 1)
+            })
+            .collect();
+        let r = map.integrate(&Isometry3::identity(), &pts).unwrap();
+        assert_eq!(r.points_used, 5);
+        let v = voxel(&map, &k);
+        let s1: [i32; 3] = core::array::from_fn(|i| qs.iter().map(|q| q[i]).sum());
+        assert_eq!(v.s1, s1);
+        assert_eq!(v.n, 5);
+        let g = map.gaussian(&k).unwrap();
+        let (mean, cov) = gaussian_f64(&qs, &k, 0.125, 0.125 / 64.0);
+        assert_gaussian_exact(&g, mean, cov);
+    }
+
+    #[test]
+    fn integrated_gaussian_close_to_raw_points() {
+        // Arbitrary points in one voxel at h = 0.1: mean within half a quantum (plus f32
+        // rounding), covariance within the quantisation error of a sample covariance.
+        let h = 0.1f64;
+        let step = h / 64.0;
+        let k = key(2, -3, 10);
+        let mut rng = Lcg(7);
+        let mut raw = Vec::new();
+        for _ in 0..60 {
+            let p: [f64; 3] = core::array::from_fn(|i| {
+                let ki = [k.x, k.y, k.z][i] as f64;
+                // Spread over the middle of the voxel, more along x than z.
+                let spread = [0.8, 0.5, 0.2][i];
+                (ki + 0.5 + spread * (rng.next() - 0.5)) * h
+            });
+            raw.push(p);
+        }
+        let pts: Vec<_> = raw
+            .iter()
+            .map(|p| lp(p[0] as f32, p[1] as f32, p[2] as f32, 2))
+            .collect();
+        let mut map: Map<16, 16, 2> = Map::new(Config::DEFAULT);
+        let r = map.integrate(&Isometry3::identity(), &pts).unwrap();
+        assert_eq!(r.points_used, 60);
+        let g = map.gaussian(&k).unwrap();
+        assert_eq!(g.count, 60);
+        let n = raw.len() as f64;
+        let mean: [f64; 3] = core::array::from_fn(|i| raw.iter().map(|p| p[i]).sum::<f64>() / n);
+        let mut cov = [[0.0; 3]; 3];
+        for p in &raw {
+            for i in 0..3 {
+                for j in 0..3 {
+                    cov[i][j] += (p[i] - mean[i]) * (p[j] - mean[j]) / (n - 1.0);
+                }
+            }
+        }
+        let dev: [f64; 3] = core::array::from_fn(|i| {
+            raw.iter()
+                .map(|p| (p[i] - mean[i]).abs())
+                .fold(0.0, f64::max)
+        });
+        for i in 0..3 {
+            assert!(
+                (g.mean[i] as f64 - mean[i]).abs() <= 0.5 * step + 1e-6,
+                "mean[{i}] {} vs {}",
+                g.mean[i],
+                mean[i]
+            );
+            for j in 0..3 {
+                // Each offset moves by e, |e| <= step/2 per axis, so the sample covariance moves
+                // by at most step/2 (max|dx_i| + max|dx_j|) + step^2/4, times n/(n-1), plus f32
+                // rounding.
+                let bound = (0.5 * step * (dev[i] + dev[j]) + 0.25 * step * step) * n / (n - 1.0)
+                    + 1e-6 * cov[i][i].max(cov[j][j]);
+                assert!(
+                    (g.covariance[(i, j)] as f64 - cov[i][j]).abs() <= bound,
+                    "cov[{i}{j}] {} vs {} (bound {bound})",
+                    g.covariance[(i, j)],
+                    cov[i][j]
+                );
+            }
+        }
+        // And the covariance really carries the anisotropy of the points.
+        assert!(g.covariance[(0, 0)] > 4.0 * g.covariance[(2, 2)]);
+    }
+}

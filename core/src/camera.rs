@@ -263,3 +263,40 @@ pub fn pose_from_matrix(r: &Matrix3<f32>, t: &Vector3<f32>) -> Result<Isometry3<
     let q = nalgebra::UnitQuaternion::from_rotation_matrix(&rot);
     Ok(Isometry3::from_parts(nalgebra::Translation3::from(*t), q))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    use crate::*;
+
+    #[test]
+    fn depth_image_size_overflow_is_rejected() {
+        // 65536 x 65536 pixels is 2^32: on a 32-bit target `width * height` must not wrap to
+        // an empty image (it would then index the empty depth slice).
+        let cam = Pinhole {
+            fx: 100.0,
+            fy: 100.0,
+            cx: 0.0,
+            cy: 0.0,
+            width: 65536,
+            height: 65536,
+        };
+        let img = DepthImage {
+            camera: cam,
+            depth: &[],
+            kind: DepthKind::Planar,
+            labels: LabelImage::None,
+            stride: 1,
+        };
+        let mut map: Map<16, 16, 1> = Map::new(Config::DEFAULT);
+        assert_eq!(
+            map.integrate_depth(&Isometry3::identity(), &img),
+            Err(Error::InvalidImage)
+        );
+        assert_eq!(
+            map.render(&Isometry3::identity(), &cam, &mut [], &mut []),
+            Err(Error::InvalidImage)
+        );
+    }
+}

@@ -195,3 +195,42 @@ pub(crate) fn to_fixed(l: f32) -> i32 {
     };
     libm::roundf(l * LOGODDS_ONE) as i32
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::*;
+    use crate::*;
+
+    /// Regression: `hit` was unbounded: `to_fixed(3e6)` saturated to `i32::MAX` and the second hit
+    /// overflowed. Now `hit` is limited to 30 and `to_fixed` clamps; the largest valid hit
+    /// saturates at the clamp.
+    #[test]
+    fn large_valid_hit_overflows_log_odds() {
+        let mut cfg = Config::DEFAULT;
+        cfg.hit = 3e6;
+        assert_eq!(cfg.validate(), Err(Error::InvalidConfig));
+        cfg.hit = 30.0;
+        assert!(cfg.validate().is_ok());
+        let mut map: Map<16, 16, 1> = Map::try_new(cfg).unwrap();
+        let pts = [lp(0.05, 0.05, 1.05, 1)];
+        map.integrate(&Isometry3::identity(), &pts).unwrap();
+        map.integrate(&Isometry3::identity(), &pts).unwrap();
+        assert_eq!(map.log_odds(&key(0, 0, 10)), 3.5);
+    }
+
+    /// Regression: Same for `miss` (was `cell + i32::MIN` on the second miss).
+    #[test]
+    fn large_valid_miss_overflows_log_odds() {
+        let mut cfg = Config::DEFAULT;
+        cfg.miss = -3e6;
+        assert_eq!(cfg.validate(), Err(Error::InvalidConfig));
+        cfg.miss = -30.0;
+        assert!(cfg.validate().is_ok());
+        let mut map: Map<16, 16, 1> = Map::try_new(cfg).unwrap();
+        let pts = [lp(0.05, 0.05, 1.05, 1)];
+        map.integrate(&Isometry3::identity(), &pts).unwrap();
+        map.integrate(&Isometry3::identity(), &pts).unwrap();
+        assert_eq!(map.log_odds(&key(0, 0, 5)), -2.0);
+    }
+}

@@ -284,3 +284,91 @@ fn origin_key(s: &[f32; 3]) -> Option<VoxelKey> {
         _ => None,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use crate::testutil::*;
+    use crate::*;
+
+    #[test]
+    fn quantised_offsets_reach_but_never_exceed_half_range() {
+        // A point on a voxel's lower corner quantises to -2^(Q-1) on every axis, the largest
+        // f32 below the upper corner to +2^(Q-1), for every allowed Q.
+        for qb in 1..=Config::MAX_QUANT_BITS {
+            let mut cfg = Config::with_cell_size(0.125);
+            cfg.quant_bits = qb;
+            let mut map: Map<16, 16, 1> = Map::try_new(cfg).unwrap();
+            let lo = 1.0f32; // voxel 8
+            let hi = f32::from_bits(1.125f32.to_bits() - 1); // still voxel 8
+            let pts = [lp(lo, lo, lo, 1), lp(hi, hi, hi, 1)];
+            map.integrate(&Isometry3::identity(), &pts).unwrap();
+            let half = 1i32 << (qb - 1);
+            let v = voxel(&map, &key(8, 8, 8));
+            assert_eq!(v.n, 2);
+            assert_eq!(v.s1, [0, 0, 0], "Q={qb}");
+            assert_eq!(v.s2, [2 * half * half; 6], "Q={qb}");
+            let mut map2: Map<16, 16, 1> = Map::try_new(cfg).unwrap();
+            map2.integrate(&Isometry3::identity(), &pts[..1]).unwrap();
+            assert_eq!(voxel(&map2, &key(8, 8, 8)).s1, [-half; 3], "Q={qb}");
+        }
+    }
+
+    /// Regression: Frame stamps are `frames % 65535 + 1`, and old stamps are only forgotten when the
+    /// stamp is 1 and `frames > 0`. When `frames` wraps from u32::MAX to 0 (a snapshot may
+    /// carry any frame count), two consecutive frames both get stamp 1 without a reset:
+    /// the second frame's blocks look already touched, are never put on the frame list,
+    /// and their voxels get no decay, no hit and no rays. `n` then exceeds `n_max` (with
+    /// n_max = 65535 and full frames, S2 overflows i32 in the next frame), and the map
+    /// writes a snapshot it cannot read back.
+    #[test]
+    fn frame_counter_wrap_skips_decay_and_hits() {
+        let mut cfg = Config::DEFAULT;
+        cfg.n_min = 2;
+        cfg.n_max = 2;
+        let mut map: Map<16, 64, 1> = Map::try_new(cfg).unwrap();
+        let mut s = snapshot(&map);
+        s[76..80].copy_from_slice(&u32::MAX.to_le_bytes());
+        fix_crc(&mut s);
+        map.read_snapshot(&s).unwrap();
+        assert_eq!(map.stats().frames, u32::MAX);
+        let p = lp(0.05, 0.05, 1.05, 1);
+        let k = key(0, 0, 10);
+        let r1 = map.integrate(&Isometry3::identity(), &[p]).unwrap();
+        assert_eq!(r1.end_voxels, 1);
+        let r2 = map.integrate(&Isometry3::identity(), &[p; 3]).unwrap();
+        let n = map.gaussian(&k).unwrap().count;
+        let ok_decay = n <= 2;
+        let ok_hit = r2.end_voxels == 1 && map.log_odds(&k) == 2.0 * 870.0 / 1024.0;
+        let mut copy: Map<16, 64, 1> = Map::new(Config::DEFAULT);
+        let ok_snapshot = copy.read_snapshot(&snapshot(&map)).is_ok();
+        assert!(
+            ok_decay && ok_hit && ok_snapshot,
+            "n = {n} (n_max 2), end_voxels {}, log-odds {}, snapshot readable {ok_snapshot}",
+            r2.end_voxels,
+            map.log_odds(&k)
+        );
+    }
+
+    /// Regression: The consequence of the stamp wrap-around at the documented bounds: with
+    /// `n_max = 65535`, three full frames of worst-case points (|q| = 32 on every axis) into
+    /// one voxel, the middle one without decay, give `S2 = 2.13e6 * 1024 > i32::MAX`:
+    /// overflow (debug panic; release wraps S2 negative).
+    #[test]
+    fn frame_counter_wrap_overflows_sums() {
+        let mut cfg = Config::with_cell_size(0.125);
+        cfg.n_max = 65535;
+        let mut map: std::boxed::Box<Map<16, 64, 1>> =
+            std::boxed::Box::new(Map::try_new(cfg).unwrap());
+        map.stats.frames = u32::MAX; // what a snapshot may carry (see the test above)
+                                     // The lower corner of voxel (8, 8, 8): q = -32 on every axis.
+        let pts = std::vec![lp(1.0, 1.0, 1.0, 1); MAX_FRAME_POINTS];
+        for _ in 0..3 {
+            map.integrate(&Isometry3::identity(), &pts).unwrap();
+        }
+        let v = voxel(&*map, &key(8, 8, 8));
+        assert!(v.n <= 65535 && v.s2[0] > 0, "n {} s2 {:?}", v.n, v.s2);
+    }
+}

@@ -109,3 +109,128 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use crate::testutil::*;
+    use crate::*;
+    use std::vec::Vec;
+
+    #[test]
+    fn decay_through_integrate() {
+        let mut cfg = Config::DEFAULT;
+        cfg.n_max = 4;
+        let mut map: Map<16, 16, 2> = Map::try_new(cfg).unwrap();
+        let pts = [lp(0.05, 0.05, 1.05, 1); 10];
+        map.integrate(&Isometry3::identity(), &pts).unwrap();
+        // 10 -> 5 -> 3.
+        assert_eq!(map.gaussian_at(&[0.05, 0.05, 1.05]).unwrap().count, 3);
+    }
+
+    #[test]
+    fn hit_and_constant_miss_fixed_point() {
+        let mut map: Map<64, 64, 2> = Map::new(Config::DEFAULT);
+        let pts = [lp(0.05, 0.05, 1.05, 1); 3];
+        let r = map.integrate(&Isometry3::identity(), &pts).unwrap();
+        assert_eq!((r.end_voxels, r.rays), (1, 1));
+        assert_eq!(to_fixed(0.85), 870);
+        assert_eq!(to_fixed(-0.4), -410);
+        assert_eq!(fixed(&map, &key(0, 0, 10)), 870);
+        for z in 0..10 {
+            // No Gaussian on the way: the constant miss, once per frame.
+            assert_eq!(fixed(&map, &key(0, 0, z)), -410, "z={z}");
+        }
+        assert_eq!(fixed(&map, &key(0, 0, 11)), 0);
+        // Clamping: many frames saturate at the configured bounds.
+        for _ in 0..10 {
+            map.integrate(&Isometry3::identity(), &pts).unwrap();
+        }
+        assert_eq!(fixed(&map, &key(0, 0, 10)), to_fixed(3.5));
+        assert_eq!(fixed(&map, &key(0, 0, 3)), to_fixed(-2.0));
+        assert_eq!(map.occupancy(&key(0, 0, 10)), Occupancy::Occupied);
+        assert_eq!(map.occupancy(&key(0, 0, 3)), Occupancy::Free);
+        assert_eq!(map.occupancy(&key(5, 5, 5)), Occupancy::Unknown);
+    }
+
+    #[test]
+    fn snapshot_identical_under_point_permutation() {
+        let mut rng = Lcg(99);
+        let mut frames = Vec::new();
+        for f in 0..3 {
+            let mut pts = Vec::new();
+            for i in 0..600 {
+                // Clusters of points (decay with n_max = 16), top-3 labels, some rejects.
+                let c = (i % 12) as f32;
+                let mut p = [
+                    0.3 * c - 1.52 + 0.06 * rng.next() as f32,
+                    0.2 * (c % 3.0) - 0.22 + 0.06 * rng.next() as f32,
+                    1.5 + 0.06 * rng.next() as f32,
+                ];
+                if i % 97 == 0 {
+                    p[2] = 30.0; // truncated at max range
+                }
+                if i % 113 == 0 {
+                    p[0] = f32::NAN;
+                }
+                let l = Labels::top_k(&[
+                    (1 + (i % 4) as u8, 200),
+                    (1 + (i % 3) as u8, (rng.next() * 255.0) as u8),
+                    ((i % 5) as u8, 90),
+                ]);
+                pts.push(LabeledPoint::new(Point3::new(p[0], p[1], p[2]), l));
+            }
+            let pose = Isometry3::from_parts(
+                Translation3::new(0.1 * f as f32, -0.05, 0.02),
+                UnitQuaternion::from_euler_angles(0.0, 0.1 * f as f32, 0.05),
+            );
+            frames.push((pose, pts));
+        }
+        let mut cfg = Config::DEFAULT;
+        cfg.n_max = 16;
+        cfg.top_k = 3;
+        cfg.min_score = 100;
+        cfg.max_range = 3.0;
+        let mut used = 0u32;
+        let mut maps: Vec<std::boxed::Box<Map<1024, 1024, 6>>> = (0..3)
+            .map(|_| std::boxed::Box::new(Map::new(cfg)))
+            .collect();
+        for (pose, pts) in &frames {
+            let mut rev = pts.clone();
+            rev.reverse();
+            let mut shuffled = pts.clone();
+            for i in (1..shuffled.len()).rev() {
+                let j = (rng.next() * (i + 1) as f64) as usize;
+                shuffled.swap(i, j);
+            }
+            let mut reports: Vec<FrameReport> = Vec::new();
+            for (m, order) in maps.iter_mut().zip([pts, &rev, &shuffled]) {
+                let r = m.integrate(pose, order).unwrap();
+                assert_eq!(
+                    (r.voxels_evicted, r.blocks_evicted, r.dropped_points),
+                    (0, 0, 0)
+                );
+                assert_eq!(r.dropped_misses, 0);
+                reports.push(r);
+            }
+            assert_eq!(reports[0], reports[1]);
+            assert_eq!(reports[0], reports[2]);
+            assert!(reports[0].truncated > 0 && reports[0].rejected_depth > 0);
+            used += reports[0].points_used;
+        }
+        let s0 = snapshot(&*maps[0]);
+        assert_eq!(s0, snapshot(&*maps[1]));
+        assert_eq!(s0, snapshot(&*maps[2]));
+        assert_eq!(maps[0].checksum(), maps[2].checksum());
+        assert_eq!(
+            maps[0].checksum(),
+            u32::from_le_bytes(s0[s0.len() - 4..].try_into().unwrap())
+        );
+        // Decay happened (else this test would not cover it): fewer points kept than used.
+        let kept: u32 = maps[0].voxels().map(|v| v.gaussian.count).sum();
+        assert!(maps[0].voxels().all(|v| v.gaussian.count <= 16));
+        assert!(kept < used, "kept {kept} of {used}");
+    }
+}

@@ -78,7 +78,7 @@ mod votes;
 mod voxel;
 
 #[cfg(test)]
-mod tests;
+mod testutil;
 
 pub use camera::{
     depth_point, pose_from_matrix, validate_pose, DepthImage, DepthKind, LabelImage, Pinhole,

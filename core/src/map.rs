@@ -331,3 +331,98 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use crate::testutil::*;
+    use crate::*;
+    use std::vec::Vec;
+
+    fn check_size<const V: usize, const B: usize, const C: usize>() {
+        let voxel = (56 + C).div_ceil(4) * 4;
+        let bytes = (128 + V * voxel + B * 184).div_ceil(8) * 8;
+        assert_eq!(Map::<V, B, C>::VOXEL_BYTES, voxel, "VOXEL_BYTES C={C}");
+        assert_eq!(
+            Map::<V, B, C>::BYTES,
+            bytes,
+            "BYTES formula V={V} B={B} C={C}"
+        );
+        assert_eq!(
+            core::mem::size_of::<Map<V, B, C>>(),
+            Map::<V, B, C>::BYTES,
+            "size_of V={V} B={B} C={C}"
+        );
+    }
+
+    macro_rules! sizes_c {
+        ($v:literal, $b:literal) => {
+            check_size::<$v, $b, 1>();
+            check_size::<$v, $b, 2>();
+            check_size::<$v, $b, 3>();
+            check_size::<$v, $b, 13>();
+            check_size::<$v, $b, 40>();
+            check_size::<$v, $b, 41>();
+        };
+    }
+
+    macro_rules! sizes_b {
+        ($($v:literal),*) => {
+            $(
+                sizes_c!($v, 1);
+                sizes_c!($v, 2);
+                sizes_c!($v, 3);
+                sizes_c!($v, 7);
+                sizes_c!($v, 10);
+                sizes_c!($v, 64);
+                sizes_c!($v, 1000);
+            )*
+        };
+    }
+
+    #[test]
+    fn memory_contract_exact_size() {
+        sizes_b!(1, 2, 3, 7, 10, 64, 1000);
+        assert_eq!(Map::<4096, 1024, 40>::VOXEL_BYTES, 96);
+        assert_eq!(Map::<1, 1, 40>::VOXEL_BYTES, 96);
+        assert_eq!(BLOCK_BYTES, 184);
+        assert_eq!(MAP_HEADER_BYTES, 128);
+        assert_eq!(core::mem::size_of::<Block>(), 184);
+        assert_eq!(Map::<1, 1, 1>::BYTES, 376); // 128 + 60 + 184 = 372 -> 376
+    }
+
+    /// Regression: `Map::new` promises to replace invalid configs by the default, but `checked()` only
+    /// looks at a few fields. With `clamp_min > clamp_max`, `i32::clamp(lo, hi)` in
+    /// `Block::add_logodds` panics (in release too).
+    #[test]
+    fn map_new_keeps_invalid_config() {
+        let mut bad = Config::DEFAULT;
+        bad.clamp_min = 0.5;
+        bad.clamp_max = 0.25;
+        assert!(bad.validate().is_err());
+        let mut map: Map<16, 16, 1> = Map::new(bad);
+        let r = std::panic::catch_unwind(core::panic::AssertUnwindSafe(|| {
+            map.integrate(&Isometry3::identity(), &[lp(0.05, 0.05, 1.05, 1)])
+                .map(|_| ())
+        }));
+        assert!(r.is_ok(), "integrate panicked on a map built by Map::new");
+        let mut others = Vec::new();
+        for f in [
+            (|c: &mut Config| c.hit = f32::INFINITY) as fn(&mut Config),
+            |c| c.miss = 1.0,
+            |c| c.lambda = 2.0,
+            |c| c.eigen_ratio = 0.0,
+            |c| c.noise_base = 0.0,
+            |c| c.max_range = f32::NAN,
+            |c| c.render_radius = -1.0,
+        ] {
+            let mut c = Config::DEFAULT;
+            f(&mut c);
+            assert!(c.validate().is_err());
+            others.push(*Map::<1, 1, 1>::new(c).config() == Config::DEFAULT);
+        }
+        assert!(others.iter().all(|ok| *ok), "{others:?}");
+    }
+}

@@ -86,3 +86,122 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use crate::gaussian::PrepCache;
+    use crate::raycast::tests::*;
+    use crate::testutil::*;
+    use crate::*;
+    use std::vec::Vec;
+
+    /// The original `render`: row-major, one ray per pixel.
+    fn reference_render<const V: usize, const B: usize, const C: usize>(
+        map: &Map<V, B, C>,
+        pose: &Isometry3<f32>,
+        camera: &Pinhole,
+    ) -> (Vec<u8>, Vec<f32>) {
+        let n = (camera.width * camera.height) as usize;
+        let (mut labels, mut distance) = (std::vec![0u8; n], std::vec![0f32; n]);
+        let rot = pose.rotation.to_rotation_matrix();
+        let origin = Point3::from(pose.translation.vector);
+        let w = camera.width as usize;
+        let mut cache = PrepCache::<128>::new();
+        for (i, (l, d)) in labels.iter_mut().zip(distance.iter_mut()).enumerate() {
+            let r = camera.ray((i % w) as u32, (i / w) as u32);
+            let dir = rot * Vector3::new(r[0], r[1], r[2]);
+            match reference_raycast(map, &mut cache, &origin, &dir, map.config.max_range) {
+                Some(hit) => {
+                    *l = hit.class;
+                    *d = hit.t;
+                }
+                None => {
+                    *l = INVALID_LABEL;
+                    *d = 0.0;
+                }
+            }
+        }
+        (labels, distance)
+    }
+
+    fn assert_same_render(map: &RoomMap, pose: &Isometry3<f32>, cam: &Pinhole) -> usize {
+        let n = (cam.width * cam.height) as usize;
+        let (want_l, want_d) = reference_render(map, pose, cam);
+        let (mut l, mut d) = (std::vec![0u8; n], std::vec![0f32; n]);
+        map.render(pose, cam, &mut l, &mut d).unwrap();
+        for i in 0..n {
+            assert!(
+                l[i] == want_l[i] && d[i].to_bits() == want_d[i].to_bits(),
+                "pixel {i}: got ({}, {}) want ({}, {})",
+                l[i],
+                d[i],
+                want_l[i],
+                want_d[i]
+            );
+        }
+        l.iter().filter(|&&c| c != INVALID_LABEL).count()
+    }
+
+    /// Renders of the box room at 5, 10 and 20 cm from mapped poses, poses between them, a
+    /// pose outside the room and one looking straight down, at a resolution that is not a
+    /// multiple of the tile size: every pixel bit-identical to the reference.
+    #[test]
+    fn render_matches_reference() {
+        big_stack(|| {
+            let odd = Pinhole {
+                fx: 70.0,
+                fy: 70.0,
+                cx: 50.0,
+                cy: 37.5,
+                width: 100,
+                height: 75,
+            };
+            let mut poses = orbit(4);
+            poses.extend(orbit(7).into_iter().skip(1).step_by(3));
+            poses.push(look_at([-1.5, -1.0, 2.0], [3.0, 2.5, 1.0]));
+            poses.push(look_at([2.0, 2.0, 2.5], [2.01, 2.0, 0.0]));
+            for cell in [0.05f32, 0.10, 0.20] {
+                let map = room_map(cell, 8);
+                let mut hits = 0;
+                for pose in &poses {
+                    hits += assert_same_render(&map, pose, &odd);
+                }
+                hits += assert_same_render(&map, &poses[0], &CAM);
+                assert!(hits > poses.len() * 7000 / 2, "{cell}: only {hits} hits");
+            }
+        });
+    }
+
+    /// Regression: `render` passes `config.max_range` as `max_t`; a valid `max_range = 1e9` hits the
+    /// same overflow.
+    #[test]
+    fn render_with_large_valid_max_range() {
+        let mut cfg = Config::DEFAULT;
+        cfg.max_range = 1e9;
+        assert_eq!(cfg.validate(), Err(Error::InvalidConfig));
+        cfg.max_range = 1e4; // the largest valid max range still renders
+        assert!(cfg.validate().is_ok());
+        let mut map: Map<512, 256, 2> = Map::try_new(cfg).unwrap();
+        let mut pts = [lp(0.0, 0.0, 0.0, 1); 400];
+        for (i, p) in pts.iter_mut().enumerate() {
+            let (u, v) = ((i % 20) as f32 / 20.0 - 0.5, (i / 20) as f32 / 20.0 - 0.5);
+            p.position = Point3::new(u, v, 2.02);
+        }
+        map.integrate(&Isometry3::identity(), &pts).unwrap();
+        let cam = Pinhole {
+            fx: 10.0,
+            fy: 10.0,
+            cx: 0.5,
+            cy: 0.5,
+            width: 1,
+            height: 1,
+        };
+        let (mut l, mut d) = ([0u8], [0f32]);
+        map.render(&at(0.05, 0.05, 0.0), &cam, &mut l, &mut d)
+            .unwrap();
+        assert_eq!(l[0], 1);
+    }
+}

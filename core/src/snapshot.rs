@@ -535,3 +535,138 @@ fn sums_possible(n: i64, s1: &[i64; 3], s2: &[i64; 6], qhalf: i64) -> bool {
         || m[2] * m[2] > dx * dz
         || m[4] * m[4] > dy * dz)
 }
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use crate::testutil::*;
+    use crate::*;
+    use std::vec::Vec;
+
+    #[test]
+    fn snapshot_round_trip_and_rejections() {
+        let mut map: Map<64, 32, 3> = Map::new(Config::DEFAULT);
+        let pts: Vec<_> = (0..50)
+            .map(|i| {
+                lp(
+                    0.02 * (i % 7) as f32,
+                    0.03 * (i % 5) as f32,
+                    1.0 + 0.01 * i as f32,
+                    1 + (i % 3) as u8,
+                )
+            })
+            .collect();
+        map.integrate(&Isometry3::identity(), &pts).unwrap();
+        let s = snapshot(&map);
+        let mut copy: Map<64, 32, 3> = Map::new(Config::with_cell_size(0.2));
+        copy.read_snapshot(&s).unwrap();
+        assert_eq!(snapshot(&copy), s);
+        assert_eq!(copy.config(), map.config());
+        // Every truncation and every flipped byte is rejected and leaves the map unchanged.
+        for cut in [0, 10, 87, 88, s.len() - 1] {
+            assert!(copy.read_snapshot(&s[..cut]).is_err());
+        }
+        for i in (0..s.len()).step_by(7) {
+            let mut bad = s.clone();
+            bad[i] ^= 0x10;
+            assert!(copy.read_snapshot(&bad).is_err(), "byte {i}");
+        }
+        assert_eq!(snapshot(&copy), s);
+        // A smaller map rejects it by capacity.
+        let mut small: Map<4, 32, 3> = Map::new(Config::DEFAULT);
+        assert_eq!(small.read_snapshot(&s), Err(Error::SnapshotCapacity));
+        let mut other: Map<64, 32, 4> = Map::new(Config::DEFAULT);
+        assert_eq!(other.read_snapshot(&s), Err(Error::SnapshotClasses));
+        // A voxel count above n_max with a valid CRC is corrupt.
+        let mut bad = s.clone();
+        let first_voxel = SNAPSHOT_HEADER_BYTES + map.block_count() * SNAPSHOT_BLOCK_BYTES;
+        bad[first_voxel + 6..first_voxel + 10].copy_from_slice(&4000u32.to_le_bytes());
+        fix_crc(&mut bad);
+        assert_eq!(copy.read_snapshot(&bad), Err(Error::SnapshotCorrupt));
+        // So is a vote sampling exponent above 15 (byte 46 of a voxel record).
+        let mut bad = s.clone();
+        bad[first_voxel + 46] = 16;
+        fix_crc(&mut bad);
+        assert_eq!(copy.read_snapshot(&bad), Err(Error::SnapshotCorrupt));
+    }
+
+    #[test]
+    fn snapshot_keeps_the_vote_sampling() {
+        // A crowded voxel samples one point in 2^3 after its first frame (500 votes, 64 per
+        // frame); a map read from its snapshot continues exactly like the original.
+        let mut map: Map<16, 16, 2> = Map::new(Config::DEFAULT);
+        let mut rng = Lcg(5);
+        map.integrate(&Isometry3::identity(), &voxel_cloud(&mut rng, 200, 300))
+            .unwrap();
+        let k = key(0, 0, 10);
+        assert_eq!(voxel(&map, &k).tally >> 12, 3);
+        let mut copy: Map<16, 16, 2> = Map::new(Config::DEFAULT);
+        copy.read_snapshot(&snapshot(&map)).unwrap();
+        assert_eq!(voxel(&copy, &k).tally >> 12, 3);
+        let next = voxel_cloud(&mut rng, 100, 400);
+        map.integrate(&Isometry3::identity(), &next).unwrap();
+        copy.integrate(&Isometry3::identity(), &next).unwrap();
+        assert_eq!(snapshot(&copy), snapshot(&map));
+    }
+
+    /// Regression: A snapshot block at block coordinate -8192 covers voxels x = -32768..-32765; the
+    /// reader accepts log-odds in its x = -32768 cells, and `cells()` then reports keys
+    /// outside the documented range `-KEY_LIMIT..=KEY_LIMIT`.
+    #[test]
+    fn snapshot_accepts_cells_outside_key_range() {
+        let mut src: Map<4, 4, 1> = Map::new(Config::DEFAULT);
+        let edge = key(-32767, 0, 0);
+        let mut b = Block::new(edge.block());
+        b.cells[0] = -100; // cell 0 of block -8192 is voxel x = -32768
+        src.blocks.insert(b).unwrap();
+        let s = snapshot(&src);
+        let mut map: Map<4, 4, 1> = Map::new(Config::DEFAULT);
+        let read = map.read_snapshot(&s);
+        let bad: Vec<VoxelKey> = map
+            .cells()
+            .map(|(k, _)| k)
+            .filter(|k| (k.x as i32).abs() > KEY_LIMIT)
+            .collect();
+        assert!(
+            read.is_err() || bad.is_empty(),
+            "accepted cells with keys {bad:?}"
+        );
+    }
+
+    /// Regression: The reader checks |S1| <= n 2^(Q-1) and |S2| <= n 4^(Q-1) but not that the sums can
+    /// come from points (n S2_ii >= S1_i^2): a voxel with S1 = n * 32, S2 = 0 is accepted and
+    /// its Gaussian has a negative variance.
+    #[test]
+    fn snapshot_accepts_impossible_sums() {
+        let mut map: Map<16, 16, 1> = Map::new(Config::DEFAULT);
+        map.integrate(&Isometry3::identity(), &[lp(0.05, 0.05, 1.05, 1); 4])
+            .unwrap();
+        let mut s = snapshot(&map);
+        let v0 = SNAPSHOT_HEADER_BYTES + map.block_count() * SNAPSHOT_BLOCK_BYTES;
+        // Record: key 6, n 4, S1 12, S2 24.
+        s[v0 + 10..v0 + 14].copy_from_slice(&128i32.to_le_bytes()); // S1x = 4 * 32
+        s[v0 + 22..v0 + 26].copy_from_slice(&0i32.to_le_bytes()); // S2xx = 0
+        fix_crc(&mut s);
+        let mut copy: Map<16, 16, 1> = Map::new(Config::DEFAULT);
+        let read = copy.read_snapshot(&s);
+        let var = copy
+            .gaussian(&key(0, 0, 10))
+            .map_or(0.0, |g| g.covariance[(0, 0)]);
+        assert!(read.is_err() || var >= 0.0, "accepted; variance {var}");
+    }
+
+    /// Regression: The 3 reserved bytes of the header must be zero: junk there is rejected.
+    #[test]
+    fn snapshot_rejects_nonzero_reserved_bytes() {
+        let mut map: Map<16, 16, 1> = Map::new(Config::DEFAULT);
+        map.integrate(&Isometry3::identity(), &[lp(0.05, 0.05, 1.05, 1); 4])
+            .unwrap();
+        let mut s = snapshot(&map);
+        s[73] = 0xAB; // reserved bytes 73..76
+        fix_crc(&mut s);
+        let mut copy: Map<16, 16, 1> = Map::new(Config::DEFAULT);
+        assert_eq!(copy.read_snapshot(&s), Err(Error::SnapshotCorrupt));
+    }
+}

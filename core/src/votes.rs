@@ -131,3 +131,169 @@ impl<const C: usize> Voxel<C> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::*;
+    use crate::*;
+
+    #[test]
+    fn make_vote_room_halves_only_above_255_minus_votes() {
+        let mut v = Voxel::<4>::new(&key(0, 0, 0));
+        v.hist = [191, 3, 0, 1];
+        v.make_vote_room(64);
+        assert_eq!(v.hist, [191, 3, 0, 1]);
+        v.hist = [192, 3, 0, 1];
+        v.make_vote_room(64);
+        assert_eq!(v.hist, [96, 1, 0, 0]);
+        v.hist = [5, 255, 200, 7];
+        v.make_vote_room(128);
+        assert_eq!(v.hist, [2, 127, 100, 3]);
+        v.hist = [5, 128, 200, 7];
+        v.make_vote_room(1);
+        assert_eq!(v.hist, [5, 128, 200, 7]);
+    }
+
+    #[test]
+    fn votes_within_the_frame_budget_all_count_and_halve_once_per_frame() {
+        let mut cfg = Config::DEFAULT;
+        cfg.votes_per_frame = 64;
+        let mut map: Map<16, 16, 2> = Map::try_new(cfg).unwrap();
+        let mut rng = Lcg(7);
+        let k = key(0, 0, 10);
+        let mut frame = |n1, n2| {
+            let pts = voxel_cloud(&mut rng, n1, n2);
+            map.integrate(&Isometry3::identity(), &pts).unwrap();
+            *map.voxel(&k).unwrap().histogram
+        };
+        assert_eq!(frame(60, 0), [60, 0]);
+        assert_eq!(frame(0, 10), [60, 10]);
+        assert_eq!(frame(64, 0), [124, 10]);
+        assert_eq!(frame(64, 0), [188, 10]);
+        assert_eq!(frame(4, 0), [192, 10]); // 188 <= 255 - 64: no halving before these votes
+                                            // 192 > 191: halve first (96, 5), then add (10, 10).
+        assert_eq!(frame(10, 10), [106, 15]);
+        assert_eq!(map.class(&k), Some((1, 106.0 / 121.0)));
+    }
+
+    #[test]
+    fn a_crowded_voxel_takes_a_hashed_sample_of_about_votes_per_frame() {
+        let cfg = Config {
+            votes_per_frame: 16,
+            ..Config::DEFAULT
+        };
+        let mut map: Map<16, 16, 2> = Map::try_new(cfg).unwrap();
+        let mut rng = Lcg(3);
+        let k = key(0, 0, 10);
+        // A new voxel counts every point of its first frame: 200 + 300 votes, saturating.
+        map.integrate(&Isometry3::identity(), &voxel_cloud(&mut rng, 200, 300))
+            .unwrap();
+        assert_eq!(map.voxel(&k).unwrap().histogram, &[200, 255]);
+        // 500 votes taken, 16 per frame: the next frame keeps one point in 2^5 = 32
+        // (500 <= 16 * 32). Room first: 255 > 255 - 16, so halve to (100, 127).
+        assert_eq!(voxel(&map, &k).tally >> 12, 5);
+        let pts = voxel_cloud(&mut rng, 200, 300);
+        map.integrate(&Isometry3::identity(), &pts).unwrap();
+        let taken = |class: u8| {
+            pts.iter()
+                .filter(|p| p.labels.classes[0] == class)
+                .filter(|p| vote_hash(&[p.position.x, p.position.y, p.position.z]) >> 27 == 0)
+                .count()
+        };
+        let (t1, t2) = (taken(1), taken(2));
+        let hist = *map.voxel(&k).unwrap().histogram;
+        assert_eq!(hist, [100 + t1 as u8, 127 + t2 as u8]);
+        assert!(
+            (6..=30).contains(&(t1 + t2)),
+            "about 500 / 32 = 15.6 votes, got {}",
+            t1 + t2
+        );
+        // The next exponent follows the votes taken: about 500 points again.
+        let want = next_vote_exponent(5, (t1 + t2) as u16, 16);
+        assert_eq!(voxel(&map, &k).tally >> 12, want as u16);
+        assert!((4..=6).contains(&want));
+        assert_eq!(map.class(&k).unwrap().0, 2);
+    }
+
+    #[test]
+    fn the_histogram_averages_over_frames() {
+        // Frames of 60 / 40 for class 2, then one frame entirely of class 1: once the voxel's
+        // sampling has adapted, the last frame weighs about as much as any other (about 16
+        // votes), so class 2 stays the argmax.
+        let cfg = Config {
+            votes_per_frame: 16,
+            ..Config::DEFAULT
+        };
+        let mut map: Map<16, 16, 2> = Map::try_new(cfg).unwrap();
+        let mut rng = Lcg(11);
+        let k = key(0, 0, 10);
+        for _ in 0..9 {
+            let pts = voxel_cloud(&mut rng, 200, 300);
+            map.integrate(&Isometry3::identity(), &pts).unwrap();
+        }
+        let before = *map.voxel(&k).unwrap().histogram;
+        assert!(before[1] > before[0], "{before:?}");
+        let pts = voxel_cloud(&mut rng, 500, 0);
+        map.integrate(&Isometry3::identity(), &pts).unwrap();
+        let hist = *map.voxel(&k).unwrap().histogram;
+        // Without halving the gain is the sample; with it, the old votes halved first.
+        let gain = if before.iter().any(|&b| b > 239) {
+            hist[0] as i32 - before[0] as i32 / 2
+        } else {
+            hist[0] as i32 - before[0] as i32
+        };
+        assert!((4..=32).contains(&gain), "{before:?} -> {hist:?}");
+        assert_eq!(map.class(&k).unwrap().0, 2, "{hist:?}");
+    }
+
+    #[test]
+    fn void_label_adds_geometry_but_no_vote() {
+        let mut map: Map<16, 16, 3> = Map::new(Config::DEFAULT);
+        let pts = [lp(0.05, 0.05, 1.05, 0); 4];
+        let r = map.integrate(&Isometry3::identity(), &pts).unwrap();
+        assert_eq!(r.points_used, 4);
+        let k = key(0, 0, 10);
+        assert_eq!(map.voxel(&k).unwrap().histogram, &[0, 0, 0]);
+        assert_eq!(map.class(&k), None);
+        assert_eq!(map.gaussian(&k).unwrap().count, 4);
+        // Labels::NONE likewise.
+        let none = [LabeledPoint::new(
+            Point3::new(0.05, 0.05, 1.05),
+            Labels::NONE,
+        )];
+        map.integrate(&Isometry3::identity(), &none).unwrap();
+        assert_eq!(map.class(&k), None);
+        assert_eq!(map.gaussian(&k).unwrap().count, 5);
+    }
+
+    #[test]
+    fn top_k_and_min_score() {
+        let k = key(0, 0, 10);
+        let labels = Labels::top_k(&[(1, 255), (2, 120), (3, 99)]);
+        let pts = [LabeledPoint::new(Point3::new(0.05, 0.05, 1.05), labels)];
+        let hist = |top_k: u8, min_score: u8| {
+            let mut cfg = Config::DEFAULT;
+            cfg.top_k = top_k;
+            cfg.min_score = min_score;
+            let mut map: Map<16, 16, 4> = Map::try_new(cfg).unwrap();
+            map.integrate(&Isometry3::identity(), &pts).unwrap();
+            *map.voxel(&k).unwrap().histogram
+        };
+        assert_eq!(hist(1, 0), [1, 0, 0, 0]);
+        assert_eq!(hist(2, 0), [1, 1, 0, 0]);
+        assert_eq!(hist(3, 0), [1, 1, 1, 0]);
+        assert_eq!(hist(3, 100), [1, 1, 0, 0]); // 99 < 100 does not vote
+        assert_eq!(hist(3, 120), [1, 1, 0, 0]); // 120 >= 120 votes
+        assert_eq!(hist(3, 121), [1, 0, 0, 0]);
+        // A label above the class count rejects the point.
+        let mut map: Map<16, 16, 4> = Map::new(Config::DEFAULT);
+        let bad = [LabeledPoint::new(
+            Point3::new(0.05, 0.05, 1.05),
+            Labels::top_k(&[(1, 255), (5, 255)]),
+        )];
+        let r = map.integrate(&Isometry3::identity(), &bad).unwrap();
+        assert_eq!((r.points_used, r.rejected_label), (0, 1));
+        assert!(map.voxel(&k).is_none());
+    }
+}

@@ -224,3 +224,185 @@ pub(crate) fn argmax(hist: &[u8]) -> Option<(u8, f32)> {
         Some((best as u8 + 1, hist[best] as f32 / total as f32))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    // Reference formulas read best with explicit indices.
+    #![allow(clippy::needless_range_loop)]
+
+    use super::*;
+    use crate::testutil::*;
+    use crate::*;
+
+    #[test]
+    fn voxel_gaussian_matches_f64_formula() {
+        let qs = [
+            [3, -5, 7],
+            [-2, 4, 1],
+            [10, 0, -6],
+            [-1, -1, -1],
+            [5, 8, 2],
+            [32, -32, 32],
+            [-32, 31, 0],
+        ];
+        for (k, h) in [
+            (key(-3, 2, 7), 0.1f32),
+            (key(0, 0, 0), 0.05),
+            (key(-1000, 999, -5), 0.2),
+        ] {
+            let mut v = Voxel::<4>::new(&k);
+            for q in qs {
+                v.add(q);
+            }
+            let step = h / 64.0;
+            let g = v.gaussian(h, step);
+            assert_eq!(g.count, qs.len() as u32);
+            let (mean, cov) = gaussian_f64(&qs, &k, h as f64, step as f64);
+            assert_gaussian_exact(&g, mean, cov);
+        }
+    }
+
+    #[test]
+    fn voxel_with_fewer_than_two_points_has_zero_covariance() {
+        let k = key(4, -2, 1);
+        let mut v = Voxel::<2>::new(&k);
+        let g0 = v.gaussian(0.1, 0.1 / 64.0);
+        assert_eq!(g0.count, 0);
+        assert_eq!(g0.covariance, Matrix3::zeros());
+        v.add([7, -3, 30]);
+        let g = v.gaussian(0.1, 0.1 / 64.0);
+        assert_eq!(g.count, 1);
+        assert_eq!(g.covariance, Matrix3::zeros());
+        let (mean, _) = gaussian_f64(&[[7, -3, 30]], &k, 0.1f32 as f64, (0.1f32 / 64.0) as f64);
+        for i in 0..3 {
+            assert!(rel_close(
+                g.mean[i] as f64,
+                mean[i],
+                4.0 * f32::EPSILON as f64,
+                0.0
+            ));
+        }
+    }
+
+    #[test]
+    fn sums_cannot_overflow() {
+        let half = 1i64 << (Config::MAX_QUANT_BITS - 1);
+        let n_max = 65535i64; // largest n_max Config::validate accepts
+        let n = n_max + MAX_FRAME_POINTS as i64;
+        // The proof: a voxel starts a frame with n <= n_max and gains at most one frame.
+        assert!(n * half <= i32::MAX as i64);
+        assert!(n * half * half <= i32::MAX as i64);
+        // i64 arithmetic of the covariance numerator n S2 - S1 S1^T cannot overflow either.
+        let (n2, s1max) = (n as i128 * (n * half * half) as i128, (n * half) as i128);
+        assert!(n2 + s1max * s1max < i64::MAX as i128);
+        // The margin is less than one more frame: decay after every frame is essential.
+        assert!((n_max + 2 * MAX_FRAME_POINTS as i64) * half * half > i32::MAX as i64);
+
+        // And the real thing: every S2 entry at its worst-case magnitude, signs mixed.
+        let mut cfg = Config::DEFAULT;
+        cfg.n_max = n_max as u32;
+        assert!(cfg.validate().is_ok());
+        let q = half as i32;
+        let mut v = Voxel::<1>::EMPTY;
+        for _ in 0..n {
+            v.add([q, -q, q]);
+        }
+        let s2 = (n * half * half) as i32;
+        let s1 = (n * half) as i32;
+        assert_eq!(v.n as i64, n);
+        assert_eq!(v.s1, [s1, -s1, s1]);
+        assert_eq!(v.s2, [s2, -s2, s2, s2, -s2, s2]);
+        // The Gaussian of that voxel is finite (all points identical: zero covariance).
+        let g = v.gaussian(0.1, 0.1 / 64.0);
+        assert!(g.covariance.iter().all(|x| *x == 0.0));
+        // Decay brings it back to n_max without overflow.
+        v.decay(n_max as u32);
+        assert!(v.n as i64 <= n_max);
+    }
+
+    #[test]
+    fn decay_halves_until_below_cap() {
+        let mut v = Voxel::<1>::new(&key(0, 0, 0));
+        v.n = 11;
+        v.s1 = [5, -5, 0];
+        v.s2 = [7, -3, 0, 9, 1, 2];
+        v.decay(5);
+        // 11 -> 6 -> 3 (up); sums scale by 3/11, rounded half away from zero.
+        assert_eq!(v.n, 3);
+        assert_eq!(v.s1, [1, -1, 0]); // 5 * 3/11 = 1.36 -> 1
+        assert_eq!(v.s2, [2, -1, 0, 2, 0, 1]); // 1.91, -0.82, 0, 2.45, 0.27, 0.55
+
+        // No change at or below the cap.
+        let mut w = Voxel::<1>::new(&key(0, 0, 0));
+        w.n = 5;
+        w.s1 = [1, 2, 3];
+        w.decay(5);
+        assert_eq!((w.n, w.s1), (5, [1, 2, 3]));
+
+        // n = 1 never reaches 0 (the loop only runs while n > n_max >= 2).
+        let mut u = Voxel::<1>::new(&key(0, 0, 0));
+        u.n = 3;
+        u.decay(2);
+        assert_eq!(u.n, 2);
+    }
+
+    #[test]
+    fn decay_preserves_mean_within_one_quantum() {
+        let mut rng = Lcg(11);
+        for n_max in [64u32, 100, 2048, 65535] {
+            for _ in 0..20 {
+                let mut v = Voxel::<1>::new(&key(0, 0, 0));
+                let n = n_max + 1 + (rng.next() * 3.0 * n_max as f64) as u32;
+                let centre: [f64; 3] = core::array::from_fn(|_| (rng.next() - 0.5) * 60.0);
+                for _ in 0..n {
+                    let q: [i32; 3] = core::array::from_fn(|i| {
+                        (centre[i] + (rng.next() - 0.5) * 4.0)
+                            .round()
+                            .clamp(-32.0, 32.0) as i32
+                    });
+                    v.add(q);
+                }
+                let before: [f64; 3] = core::array::from_fn(|i| v.s1[i] as f64 / v.n as f64);
+                v.decay(n_max);
+                assert!(v.n <= n_max && v.n > n_max / 2, "n {} cap {n_max}", v.n);
+                for i in 0..3 {
+                    let after = v.s1[i] as f64 / v.n as f64;
+                    assert!((after - before[i]).abs() <= 1.0, "{before:?} -> {after}");
+                }
+            }
+        }
+    }
+
+    /// Regression: Decay rounds `n` up but halves the sums: for odd `n` the mean shrinks toward the
+    /// voxel centre by a factor n / (n + 1) and variance appears from nothing. With a small
+    /// (valid) `n_max`, three identical points 20 quanta off-centre end up as a Gaussian
+    /// whose mean moved 5 quanta and whose standard deviation is 12 quanta.
+    #[test]
+    fn decay_with_small_n_max_distorts_gaussian() {
+        let mut cfg = Config::with_cell_size(0.125);
+        cfg.n_min = 2;
+        cfg.n_max = 2;
+        let mut map: Map<16, 16, 1> = Map::try_new(cfg).unwrap();
+        // x = centre + 20 quanta + 1/4 quantum: q = 20 for all three points.
+        let x = (32.0 + 20.0 + 0.25) / 512.0;
+        map.integrate(&Isometry3::identity(), &[lp(x, 0.0625, 1.0625, 1); 3])
+            .unwrap();
+        let g = map.gaussian(&key(0, 0, 8)).unwrap();
+        let step = 0.125 / 64.0;
+        let mean_err = (g.mean.x as f64 - (0.0625 + 20.0 * step)).abs();
+        assert!(
+            mean_err <= step && g.covariance[(0, 0)] == 0.0,
+            "mean off by {} quanta, var {} quanta^2",
+            mean_err / step,
+            g.covariance[(0, 0)] as f64 / (step * step)
+        );
+    }
+
+    #[test]
+    fn argmax_ties_go_to_lower_class() {
+        assert_eq!(argmax(&[0, 5, 5, 1]), Some((2, 5.0 / 11.0)));
+        assert_eq!(argmax(&[9, 9]), Some((1, 0.5)));
+        assert_eq!(argmax(&[0, 0, 3]), Some((3, 1.0)));
+        assert_eq!(argmax(&[0, 0, 0]), None);
+    }
+}
