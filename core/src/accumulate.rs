@@ -12,7 +12,7 @@ use crate::frame::FrameState;
 use crate::key::{axis_key, VoxelKey};
 use crate::labels::Labels;
 use crate::map::Map;
-use crate::votes::has_vote;
+use crate::votes::voting_classes;
 use crate::voxel::{PointSums, Voxel};
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
@@ -43,8 +43,9 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             return;
         };
         self.add_to_run(f, vs, q);
-        if has_vote(labels, &self.config) {
-            self.voxels.slots[vs].vote(&p, labels, &self.config);
+        let classes = voting_classes(labels, &self.config);
+        if !classes.is_empty() {
+            self.voxels.slots[vs].vote(&p, &classes);
         }
         f.report.points_used += 1;
     }

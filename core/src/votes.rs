@@ -8,7 +8,7 @@
 //! saturate a bin.
 
 use crate::config::Config;
-use crate::labels::Labels;
+use crate::labels::{Labels, MAX_TOP_K};
 use crate::voxel::Voxel;
 
 /// Largest count of votes taken in one frame that a tally holds.
@@ -73,12 +73,22 @@ pub fn next_vote_exponent(exponent: u8, taken: u16, votes_per_frame: u8) -> u8 {
     k
 }
 
-/// Whether any of a point's (valid) labels votes: one of its first `top_k` labels is a
-/// class (not void) with a score of at least `min_score`.
+/// The classes one point votes for, best first: at most one per label.
+pub(crate) type VotingClasses = heapless::Vec<u8, MAX_TOP_K, u8>;
+
+/// The classes a point with (valid, see `Labels::fits`) labels votes for: those of its
+/// first `top_k` labels that are a class (not void) with a score of at least `min_score`.
 #[inline]
-pub(crate) fn has_vote(labels: &Labels, cfg: &Config) -> bool {
+pub(crate) fn voting_classes(labels: &Labels, cfg: &Config) -> VotingClasses {
     let k = (cfg.top_k as usize).min(labels.len as usize);
-    (0..k).any(|i| labels.classes[i] >= 1 && labels.scores[i] >= cfg.min_score)
+    let mut classes = VotingClasses::new();
+    for i in 0..k {
+        if labels.classes[i] >= 1 && labels.scores[i] >= cfg.min_score {
+            // Cannot fail: k <= labels.len <= MAX_TOP_K.
+            let _ = classes.push(labels.classes[i]);
+        }
+    }
+    classes
 }
 
 impl<const C: usize> Voxel<C> {
@@ -93,20 +103,18 @@ impl<const C: usize> Voxel<C> {
         self.tally = (exponent as u16) << EXPONENT_SHIFT;
     }
 
-    /// The votes of a point at `p` (sensor frame) whose labels vote ([`has_vote`]), if
-    /// this frame's sample takes it: one per voting label, saturating.
+    /// The votes of a point at `p` (sensor frame) for `classes` (1..=C, from
+    /// [`voting_classes`], not empty), if this frame's sample takes the point: one vote per
+    /// class, saturating.
     #[inline]
-    pub(crate) fn vote(&mut self, p: &[f32; 3], labels: &Labels, cfg: &Config) {
+    pub(crate) fn vote(&mut self, p: &[f32; 3], classes: &[u8]) {
         let exponent = self.vote_exponent();
         if exponent == 0 || takes_vote(vote_hash(p), exponent) {
             let taken = (self.tally & VOTES_TAKEN_MAX) + 1;
             self.tally = (self.tally & !VOTES_TAKEN_MAX) | taken.min(VOTES_TAKEN_MAX);
-            let k = (cfg.top_k as usize).min(labels.len as usize);
-            for i in 0..k {
-                let c = labels.classes[i] as usize;
-                if c >= 1 && labels.scores[i] >= cfg.min_score {
-                    self.hist[c - 1] = self.hist[c - 1].saturating_add(1);
-                }
+            for &c in classes {
+                let c = c as usize;
+                self.hist[c - 1] = self.hist[c - 1].saturating_add(1);
             }
         }
     }
