@@ -6,25 +6,45 @@
 //! every surface voxel holds a Gaussian of its points and a class histogram, every observed
 //! voxel an occupancy value, and free space comes from ray casting.
 //!
-//! ## Layers
+//! ## The map
 //!
-//! * **Map** ([`Map`], `map.rs`): two fixed-capacity hash tables with stable slots and
-//!   deterministic eviction. The *occupancy layer* stores fixed-point log-odds of every
-//!   observed voxel, free or occupied, in 4x4x4 blocks (`BLOCKS` capacity, 2.9 bytes per
-//!   voxel); the *surface layer* stores NDT voxels (`VOXELS` capacity, 96 bytes each with 40
-//!   classes). [`Map::BYTES`] is the exact `size_of` formula.
-//! * **Voxel statistics** (`voxel.rs`): integer-quantised sums `n, S1, S2` (exact, so the map
-//!   does not depend on point order), the [`Gaussian`] they define with an eigenvalue floor,
-//!   the point cap `n_max` with decay, and the `u8` class histogram.
-//! * **Integration** (`integrate.rs`): [`Map::integrate`] folds one frame of labelled points
-//!   (or [`Map::integrate_depth`] a depth image with labels) into the map and returns a
-//!   [`FrameReport`]; free space by exact 3-D DDA to the frame's unique end voxels, with
-//!   NDT-OM likelihood-weighted misses ([`MissModel`]).
-//! * **Ray casting and rendering** (`raycast.rs`): [`Map::raycast`] returns the first
-//!   occupied Gaussian a ray enters; [`Map::render`] renders a label/depth image from a pose
-//!   (back-projection for evaluation, or "what the robot should see").
-//! * **Snapshot** (`snapshot.rs`): [`Map::write_snapshot`] / [`Map::read_snapshot`], a
-//!   versioned little-endian image with CRC-32 in a caller's buffer.
+//! Two fixed-capacity hash tables with stable slots and deterministic eviction. The
+//! *occupancy layer* stores fixed-point log-odds of every observed voxel, free or occupied,
+//! in 4x4x4 blocks (`BLOCKS` capacity, 2.9 bytes per voxel); the *surface layer* stores NDT
+//! voxels (`VOXELS` capacity, 96 bytes each with 40 classes): integer-quantised point sums
+//! `n, S1, S2` (exact, so the map does not depend on point order), which define a
+//! [`Gaussian`], and a `u8` class histogram. [`Map::BYTES`] is the exact `size_of` formula.
+//!
+//! [`Map::integrate`] folds one frame of labelled points (or [`Map::integrate_depth`] a
+//! depth image with labels) into the map and returns a [`FrameReport`]; free space comes
+//! from exact 3-D DDA to the frame's unique end voxels, with NDT-OM likelihood-weighted
+//! misses ([`MissModel`]). [`Map::raycast`] returns the first occupied Gaussian a ray
+//! enters; [`Map::render`] renders a label/distance image from a pose. [`Map::write_snapshot`]
+//! and [`Map::read_snapshot`] keep a versioned little-endian image with a CRC-32 in a
+//! caller's buffer.
+//!
+//! ## Modules, in dependency order
+//!
+//! Each module uses only modules above it (the unit tests at the end of a module may use
+//! anything). Methods of [`Map`] are spread over the modules of their concern, and calls
+//! between them point up this list too.
+//!
+//! | module | what it holds |
+//! |---|---|
+//! | `error`, `labels` | [`Error`]; a point's top-k [`Labels`] and [`LabeledPoint`] |
+//! | `key` | [`VoxelKey`], packed table keys and the hash that orders them |
+//! | `crc`, `dda`, `gaussian` | CRC-32; 3-D DDA voxel walk; [`Gaussian`], its prepared inverse with the eigenvalue floor |
+//! | `config`, `camera` | [`Config`]; [`Pinhole`], depth images, [`depth_point`], pose checks |
+//! | `table` | the fixed-capacity hash table with stable slots |
+//! | `block`, `voxel` | occupancy blocks; surface voxels: sums, decay, histogram |
+//! | `map`, `votes` | the [`Map`] struct and its queries; vote sampling of the histogram |
+//! | `evict`, `raycast`, `snapshot` | eviction of far entries; [`Map::raycast`]; snapshots |
+//! | `frame` | the state of one frame being integrated, [`FrameReport`] |
+//! | `accumulate`, `free_space` | integration phase 1 (points into sums and votes) and phase 3 (rays) |
+//! | `integrate`, `render` | [`Map::integrate`] and [`Map::integrate_depth`] as their steps; [`Map::render`] |
+//!
+//! Integer formats, the snapshot layout and eviction are described in more depth in
+//! `docs/ARCHITECTURE.md`.
 //!
 //! ## Example
 //!
@@ -55,27 +75,38 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
-mod accumulate;
-mod block;
-mod camera;
-mod config;
+// In dependency order (see the table above).
+mod error;
+mod labels;
+
+mod key;
+
 mod crc;
 mod dda;
-mod error;
-mod evict;
-mod frame;
-mod free_space;
 mod gaussian;
-mod integrate;
-mod key;
-mod labels;
-mod map;
-mod raycast;
-mod render;
-mod snapshot;
+
+mod camera;
+mod config;
+
 mod table;
-mod votes;
+
+mod block;
 mod voxel;
+
+mod map;
+mod votes;
+
+mod evict;
+mod raycast;
+mod snapshot;
+
+mod frame;
+
+mod accumulate;
+mod free_space;
+
+mod integrate;
+mod render;
 
 #[cfg(test)]
 mod testutil;
