@@ -42,6 +42,7 @@ impl Pinhole {
         ]
     }
 
+    /// Finite, positive focal lengths and a finite principal point.
     pub(crate) fn valid(&self) -> bool {
         let ok = |f: f32| f.is_finite() && f > 0.0;
         ok(self.fx) && ok(self.fy) && self.cx.is_finite() && self.cy.is_finite()

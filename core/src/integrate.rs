@@ -4,14 +4,16 @@
 //! 1. **validate the frame** (size, image, pose; an error leaves the map untouched) and
 //!    start its state (`frame.rs`);
 //! 2. **turn pixels into points** ([`crate::depth_point`], `camera.rs`), for depth images;
-//! 3. **accumulate points per end voxel** (`accumulate.rs`): integer sums, histogram votes
-//!    of a hashed sample (`votes.rs`), the frame's list of touched blocks;
-//! 4. **apply one update per touched voxel**: the list is sorted by key; each hit voxel
-//!    decays to `n_max`, gets one hit and sets its vote sampling for the next frame;
-//! 5. **free space along the rays** (`free_space.rs`): one ray per unique end voxel and per
-//!    unique truncated end, in sorted order, at most one miss per traversed voxel.
+//! 3. phase 1, **accumulate points per end voxel** (`accumulate.rs`): integer sums,
+//!    histogram votes of a hashed sample (`votes.rs`), the frame's list of touched blocks;
+//! 4. phase 2, **apply one update per touched voxel** (here): the list is sorted by key;
+//!    each voxel that received points decays to `n_max`, gets one hit and sets its vote
+//!    sampling for the next frame;
+//! 5. phase 3, **free space along the rays** (`free_space.rs`): one ray per unique end
+//!    voxel and per unique truncated end, in sorted order, at most one miss per traversed
+//!    voxel.
 //!
-//! Points only meet integer sums and per-frame masks before step 4, and steps 4 and 5 go in
+//! Phase 1 only adds to integer sums and sets per-frame masks, and phases 2 and 3 go in
 //! key order, so the result does not depend on point order.
 
 use crate::block::bits;
@@ -76,7 +78,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         Ok(self.finish(f))
     }
 
-    /// Steps 4 and 5 after the frame's last point, then the frame's totals.
+    /// Phases 2 and 3 after the frame's last point, then the frame's totals.
     fn finish(&mut self, mut f: FrameState) -> FrameReport {
         self.flush_run(&mut f);
         let head = self.sort_frame_list(f.head);
@@ -85,7 +87,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         self.close_frame(f)
     }
 
-    /// Step 4 along the sorted frame list from `head`: every voxel that received points
+    /// Phase 2 along the sorted frame list from `head`: every voxel that received points
     /// decays to `n_max`, ends its vote sample, and gets one hit.
     fn update_end_voxels(&mut self, f: &mut FrameState, head: u32) {
         let cfg = self.config;

@@ -1,4 +1,6 @@
-//! The map: two fixed tables (occupancy blocks, NDT voxels), queries and eviction.
+//! The map: its two fixed tables (occupancy blocks, NDT voxels), construction and the
+//! read-only queries. What changes the map lives with its concern: integration
+//! (`integrate.rs` and the phases it calls), eviction (`evict.rs`), snapshots.
 
 use crate::block::Block;
 use crate::config::{Config, MissModel, LOGODDS_ONE};
