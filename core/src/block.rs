@@ -6,6 +6,7 @@
 //! index). A voxel's occupancy lives only here; the surface layer (NDT voxels) holds the
 //! Gaussian and the histogram, and a block's `surface` mask says which cells have one.
 
+use crate::key::{join_key, split_key};
 use crate::table::Entry;
 
 /// Log-odds value 0 = probability 0.5 = unknown.
@@ -46,8 +47,9 @@ impl Entry for Block {
         key: [0; 3],
         stamp: 0,
     };
+    #[inline]
     fn packed_key(&self) -> u64 {
-        ((self.key[0] as u64) << 32) | ((self.key[1] as u64) << 16) | self.key[2] as u64
+        join_key(self.key)
     }
     fn chain(&self) -> u32 {
         self.chain
@@ -66,7 +68,7 @@ impl Entry for Block {
 impl Block {
     pub(crate) fn new(packed: u64) -> Block {
         let mut b = Block::EMPTY;
-        b.key = crate::voxel::split_key(packed);
+        b.key = split_key(packed);
         b
     }
 

@@ -1,6 +1,7 @@
 //! The one plain configuration struct of the map, with documented defaults.
 
-use crate::Error;
+use crate::error::Error;
+use crate::labels::MAX_TOP_K;
 
 /// How a voxel traversed by a free-space ray loses occupancy.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -81,7 +82,7 @@ pub struct Config {
     /// keep more of each frame and still let a close view (more points) outweigh a
     /// distant one, whose segmentation is usually worse. On the synthetic split with
     /// predicted labels at 10 cm (`sndt map synthetic:6:20 --labels pred
-    /// --votes-per-frame N`), larger was better (README "Design decisions").
+    /// --votes-per-frame N`), larger was better.
     pub votes_per_frame: u8,
     /// Free-space model. Default [`MissModel::NdtOm`].
     pub miss_model: MissModel,
@@ -163,7 +164,7 @@ impl Config {
             && within(self.noise_quadratic, 0.0, 1e3)
             && within(self.max_range, 1e-3, 1e4)
             && self.top_k >= 1
-            && self.top_k as usize <= crate::MAX_TOP_K
+            && self.top_k as usize <= MAX_TOP_K
             && self.votes_per_frame >= 1
             && self.votes_per_frame <= 64
             && within(self.render_radius, 0.1, 10.0);
@@ -193,4 +194,43 @@ pub(crate) fn to_fixed(l: f32) -> i32 {
         l.clamp(-64.0, 64.0)
     };
     libm::roundf(l * LOGODDS_ONE) as i32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::*;
+    use crate::*;
+
+    /// Regression: `hit` was unbounded: `to_fixed(3e6)` saturated to `i32::MAX` and the second hit
+    /// overflowed. Now `hit` is limited to 30 and `to_fixed` clamps; the largest valid hit
+    /// saturates at the clamp.
+    #[test]
+    fn large_valid_hit_overflows_log_odds() {
+        let mut cfg = Config::DEFAULT;
+        cfg.hit = 3e6;
+        assert_eq!(cfg.validate(), Err(Error::InvalidConfig));
+        cfg.hit = 30.0;
+        assert!(cfg.validate().is_ok());
+        let mut map: Map<16, 16, 1> = Map::try_new(cfg).unwrap();
+        let pts = [lp(0.05, 0.05, 1.05, 1)];
+        map.integrate(&Isometry3::identity(), &pts).unwrap();
+        map.integrate(&Isometry3::identity(), &pts).unwrap();
+        assert_eq!(map.log_odds(&key(0, 0, 10)), 3.5);
+    }
+
+    /// Regression: Same for `miss` (was `cell + i32::MIN` on the second miss).
+    #[test]
+    fn large_valid_miss_overflows_log_odds() {
+        let mut cfg = Config::DEFAULT;
+        cfg.miss = -3e6;
+        assert_eq!(cfg.validate(), Err(Error::InvalidConfig));
+        cfg.miss = -30.0;
+        assert!(cfg.validate().is_ok());
+        let mut map: Map<16, 16, 1> = Map::try_new(cfg).unwrap();
+        let pts = [lp(0.05, 0.05, 1.05, 1)];
+        map.integrate(&Isometry3::identity(), &pts).unwrap();
+        map.integrate(&Isometry3::identity(), &pts).unwrap();
+        assert_eq!(map.log_odds(&key(0, 0, 5)), -2.0);
+    }
 }

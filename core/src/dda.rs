@@ -1,5 +1,5 @@
-//! Exact voxel traversal (Amanatides & Woo, 1987) in voxel units, shared by free-space
-//! integration and rendering.
+//! Exact voxel traversal (Amanatides & Woo, 1987) in voxel units, shared by free space
+//! (`free_space.rs`) and ray casting (`raycast.rs`).
 
 /// Walk state: the current voxel and, per axis, the ray parameter of the next boundary.
 pub(crate) struct Dda {

@@ -1,278 +1,31 @@
-//! Frame integration: points into voxel statistics and histograms, one hit per end voxel,
-//! free space by exact 3-D DDA with NDT-OM misses.
+//! Frame integration: one frame of labelled points, or a depth image with labels, into the
+//! map. [`Map::integrate`] and [`Map::integrate_depth`] run the same steps:
 //!
-//! A frame runs in three phases so its result does not depend on point order:
-//! 1. every point goes into its voxel's integer sums, and votes in its histogram if the
-//!    voxel's vote sample takes it (see [`crate::Config::votes_per_frame`]); the first
-//!    point of a voxel in the frame makes room in its histogram, marks it in its block's
-//!    `hit` mask and links the block into the frame's block list (points beyond max range
-//!    mark a `far` cell instead);
-//! 2. the block list is sorted by key; each hit voxel decays to `n_max`, gets one hit and
-//!    sets its vote sampling for the next frame from the votes it took in this one;
-//! 3. one ray per unique end voxel (to the mean of its points, end voxel excluded) and per
-//!    unique truncated end (end included), in sorted order, gives every traversed voxel at
-//!    most one miss.
+//! 1. **validate the frame** (size, image, pose; an error leaves the map untouched) and
+//!    start its state (`frame.rs`);
+//! 2. **turn pixels into points** ([`crate::depth_point`], `camera.rs`), for depth images;
+//! 3. phase 1, **accumulate points per end voxel** (`accumulate.rs`): integer sums,
+//!    histogram votes of a hashed sample (`votes.rs`), the frame's list of touched blocks;
+//! 4. phase 2, **apply one update per touched voxel** (here): the list is sorted by key;
+//!    each voxel that received points decays to `n_max`, gets one hit and sets its vote
+//!    sampling for the next frame;
+//! 5. phase 3, **free space along the rays** (`free_space.rs`): one ray per unique end
+//!    voxel and per unique truncated end, in sorted order, at most one miss per traversed
+//!    voxel.
+//!
+//! Phase 1 only adds to integer sums and sets per-frame masks, and phases 2 and 3 go in
+//! key order, so the result does not depend on point order.
 
-use crate::block::{bits, Block};
-use crate::config::{to_fixed, MissModel};
-use crate::dda::Dda;
-use crate::key::{axis_key, floor_i32, VoxelKey};
+use crate::block::bits;
+use crate::camera::DepthImage;
+use crate::config::to_fixed;
+use crate::error::Error;
+use crate::frame::{FrameReport, FrameState, MAX_FRAME_POINTS};
+use crate::key::VoxelKey;
+use crate::labels::LabeledPoint;
 use crate::map::Map;
 use crate::table::{Entry, NIL};
-use crate::voxel::{PrepCache, Prepared, Voxel, EXPONENT_SHIFT, VOTES_TAKEN_MAX};
-use crate::{Error, LabeledPoint, Labels, MAX_FRAME_POINTS, MAX_TOP_K};
-use nalgebra::{Isometry3, Matrix3, Vector3};
-
-/// What one frame did. Every point is accounted for exactly once in `points_used`,
-/// `truncated` or one of the `rejected_*`/`dropped_points` counters.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct FrameReport {
-    /// Points folded into voxel statistics.
-    pub points_used: u32,
-    /// Points beyond max range: they only cleared free space up to max range.
-    pub truncated: u32,
-    /// NaN/inf coordinates, or zero/negative/NaN/inf depth.
-    pub rejected_depth: u32,
-    /// A label above the class count, or more than 3 labels.
-    pub rejected_label: u32,
-    /// Points outside the key range.
-    pub rejected_out_of_range: u32,
-    /// Points lost because the map was full and nothing could be evicted.
-    pub dropped_points: u32,
-    /// Free-space updates lost because the map was full and nothing could be evicted.
-    pub dropped_misses: u32,
-    /// Unique end voxels this frame (= hit updates = rays to surfaces).
-    pub end_voxels: u32,
-    /// Rays cast (end voxels + unique truncated ends).
-    pub rays: u32,
-    /// NDT voxels created.
-    pub voxels_created: u32,
-    /// Occupancy blocks created.
-    pub blocks_created: u32,
-    /// NDT voxels evicted to make room.
-    pub voxels_evicted: u32,
-    /// Occupancy blocks evicted to make room.
-    pub blocks_evicted: u32,
-}
-
-/// Pinhole intrinsics in pixels, OpenCV camera axes (x right, y down, z forward). Pixel
-/// `(col, row)` has its centre at `(col + 0.5, row + 0.5)`, so a centred principal point is
-/// `cx = width / 2`.
-///
-/// ```
-/// let cam = sndt_core::Pinhole { fx: 100.0, fy: 100.0, cx: 2.0, cy: 2.0, width: 4, height: 4 };
-/// assert_eq!(cam.ray(2, 1), [0.005, -0.005, 1.0]);
-/// ```
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Pinhole {
-    /// Focal length along x, pixels.
-    pub fx: f32,
-    /// Focal length along y, pixels.
-    pub fy: f32,
-    /// Principal point x, pixels.
-    pub cx: f32,
-    /// Principal point y, pixels.
-    pub cy: f32,
-    /// Image width.
-    pub width: u32,
-    /// Image height.
-    pub height: u32,
-}
-
-impl Pinhole {
-    /// Direction of the pixel's centre ray with unit z.
-    pub fn ray(&self, col: u32, row: u32) -> [f32; 3] {
-        [
-            (col as f32 + 0.5 - self.cx) / self.fx,
-            (row as f32 + 0.5 - self.cy) / self.fy,
-            1.0,
-        ]
-    }
-
-    pub(crate) fn valid(&self) -> bool {
-        let ok = |f: f32| f.is_finite() && f > 0.0;
-        ok(self.fx) && ok(self.fy) && self.cx.is_finite() && self.cy.is_finite()
-    }
-
-    /// `width * height`, or `None` when it overflows `usize` (16-bit/32-bit targets).
-    pub(crate) fn pixels(&self) -> Option<usize> {
-        (self.width as usize).checked_mul(self.height as usize)
-    }
-}
-
-/// What a depth value means.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum DepthKind {
-    /// Distance along the optical axis (z), as in most depth cameras.
-    Planar,
-    /// Euclidean distance from the optical centre (Hypersim `depth_meters`).
-    Range,
-}
-
-/// Per-pixel labels of a depth image.
-#[derive(Clone, Copy, Debug)]
-pub enum LabelImage<'a> {
-    /// No labels: geometry only.
-    None,
-    /// One class id per pixel (0 = void).
-    Top1(&'a [u8]),
-    /// Top-k labels per pixel.
-    TopK(&'a [Labels]),
-}
-
-/// A depth image with labels, row-major, `width * height` entries each.
-///
-/// ```
-/// use sndt_core::*;
-/// let cam = Pinhole { fx: 4.0, fy: 4.0, cx: 4.0, cy: 3.0, width: 8, height: 6 };
-/// let depth = [2.0f32; 48];
-/// let labels = [1u8; 48];
-/// let img = DepthImage { camera: cam, depth: &depth, kind: DepthKind::Planar,
-///                        labels: LabelImage::Top1(&labels), stride: 1 };
-/// let mut map: Map<256, 64, 40> = Map::new(Config::DEFAULT);
-/// let r = map.integrate_depth(&Isometry3::identity(), &img).unwrap();
-/// assert_eq!(r.points_used, 48);
-/// ```
-#[derive(Clone, Copy, Debug)]
-pub struct DepthImage<'a> {
-    /// Intrinsics and size.
-    pub camera: Pinhole,
-    /// Depth in metres; 0, negative, NaN or inf = invalid.
-    pub depth: &'a [f32],
-    /// Planar depth or Euclidean range.
-    pub kind: DepthKind,
-    /// Labels.
-    pub labels: LabelImage<'a>,
-    /// Use every `stride`-th pixel in both directions (1 = all).
-    pub stride: u32,
-}
-
-/// Builds a pose from a rotation matrix and translation, checking that the rotation is
-/// orthonormal with determinant +1 (within 1e-3) and everything is finite.
-///
-/// ```
-/// use sndt_core::{pose_from_matrix, Matrix3, Vector3, Error};
-/// assert!(pose_from_matrix(&Matrix3::identity(), &Vector3::zeros()).is_ok());
-/// let sheared = Matrix3::new(1.0, 0.2, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0);
-/// assert_eq!(pose_from_matrix(&sheared, &Vector3::zeros()), Err(Error::InvalidPose));
-/// ```
-pub fn pose_from_matrix(r: &Matrix3<f32>, t: &Vector3<f32>) -> Result<Isometry3<f32>, Error> {
-    if r.iter().chain(t.iter()).any(|x| !x.is_finite()) {
-        return Err(Error::InvalidPose);
-    }
-    let rtr = r.transpose() * r;
-    let off = (rtr - Matrix3::identity()).abs().max();
-    if off > 1e-3 || r.determinant() < 0.0 {
-        return Err(Error::InvalidPose);
-    }
-    let rot = nalgebra::Rotation3::from_matrix_unchecked(*r);
-    let q = nalgebra::UnitQuaternion::from_rotation_matrix(&rot);
-    Ok(Isometry3::from_parts(nalgebra::Translation3::from(*t), q))
-}
-
-/// Per-frame state; lives on the stack during one integration.
-struct Frame {
-    rot: Matrix3<f32>,
-    origin: [f32; 3],
-    origin_s: [f32; 3],
-    origin_key: VoxelKey,
-    stamp: u16,
-    h: f32,
-    inv_h: f32,
-    /// `2^Q / h`: world metres to quanta.
-    inv_quantum: f32,
-    /// Key range in quanta: `[-32767 * 2^Q, 32768 * 2^Q)`.
-    t_min: f32,
-    t_max: f32,
-    quant_bits: u32,
-    quant_mask: i32,
-    qscale: f32,
-    qhalf: i32,
-    max_range: f32,
-    head: u32,
-    block_cache: (u64, usize),
-    voxel_cache: (u64, usize),
-    run: Run,
-    voxels_exhausted: bool,
-    blocks_exhausted: bool,
-    report: FrameReport,
-    evicted_before: (u64, u64),
-}
-
-/// Sums of consecutive points that fell into the same voxel (slot), not yet added to it.
-pub(crate) struct Run {
-    pub(crate) slot: usize,
-    pub(crate) n: u32,
-    pub(crate) s1: [i32; 3],
-    pub(crate) s2: [i32; 6],
-}
-
-impl Run {
-    pub(crate) const EMPTY: Run = Run {
-        slot: usize::MAX,
-        n: 0,
-        s1: [0; 3],
-        s2: [0; 6],
-    };
-
-    #[inline]
-    pub(crate) fn add(&mut self, q: [i32; 3]) {
-        self.n += 1;
-        self.s1[0] += q[0];
-        self.s1[1] += q[1];
-        self.s1[2] += q[2];
-        self.s2[0] += q[0] * q[0];
-        self.s2[1] += q[0] * q[1];
-        self.s2[2] += q[0] * q[2];
-        self.s2[3] += q[1] * q[1];
-        self.s2[4] += q[1] * q[2];
-        self.s2[5] += q[2] * q[2];
-    }
-}
-
-impl Frame {
-    /// A sensor-frame point in world coordinates (`f32`, the key convention).
-    #[inline]
-    fn to_world(&self, p: &[f32; 3]) -> [f32; 3] {
-        let m = &self.rot;
-        let mut w = [0.0f32; 3];
-        for (i, wi) in w.iter_mut().enumerate() {
-            *wi = m[(i, 0)] * p[0] + m[(i, 1)] * p[1] + m[(i, 2)] * p[2] + self.origin[i];
-        }
-        w
-    }
-
-    /// The voxel key of a world point and its quantised offset, or `None` outside the key
-    /// range. Works in quanta (`t = w / h * 2^Q`, an exact power-of-two scaling of
-    /// `w / h`): one float-to-int conversion per axis gives both the key
-    /// (`floor(t) >> Q`) and the offset (round half up of `t - 2^Q k - 2^(Q-1)`).
-    #[inline]
-    fn quantise(&self, w: &[f32; 3]) -> Option<(VoxelKey, [i32; 3])> {
-        let mut key_i = [0i32; 3];
-        let mut q = [0i32; 3];
-        for i in 0..3 {
-            let t = w[i] * self.inv_quantum;
-            if !(t >= self.t_min && t < self.t_max) {
-                return None;
-            }
-            let m = floor_i32(t);
-            key_i[i] = m >> self.quant_bits;
-            q[i] = (m & self.quant_mask) - self.qhalf + ((t - m as f32) >= 0.5) as i32;
-        }
-        let key = VoxelKey {
-            x: key_i[0] as i16,
-            y: key_i[1] as i16,
-            z: key_i[2] as i16,
-        };
-        Some((key, q))
-    }
-}
-
-/// Prepared-Gaussian cache of phase 3 (voxel statistics no longer change then).
-type GaussCache = PrepCache<32>;
+use nalgebra::Isometry3;
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// Integrates one frame of labelled points given in the sensor frame at `pose`
@@ -301,7 +54,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         if points.len() > MAX_FRAME_POINTS {
             return Err(Error::FrameTooLarge);
         }
-        let mut f = self.begin(pose)?;
+        let mut f = self.begin_frame(pose)?;
         for p in points {
             let q = [p.position.x, p.position.y, p.position.z];
             self.add_point(&mut f, q, &p.labels);
@@ -316,265 +69,30 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         pose: &Isometry3<f32>,
         image: &DepthImage<'_>,
     ) -> Result<FrameReport, Error> {
-        let cam = &image.camera;
-        let n = cam.pixels().ok_or(Error::InvalidImage)?;
-        let labels_ok = match image.labels {
-            LabelImage::None => true,
-            LabelImage::Top1(l) => l.len() == n,
-            LabelImage::TopK(l) => l.len() == n,
-        };
-        if !cam.valid() || image.depth.len() != n || !labels_ok || image.stride == 0 {
-            return Err(Error::InvalidImage);
-        }
-        let stride = image.stride as usize;
-        let (w, h) = (cam.width as usize, cam.height as usize);
-        if w.div_ceil(stride) * h.div_ceil(stride) > MAX_FRAME_POINTS {
+        image.validate()?;
+        if image.samples() > MAX_FRAME_POINTS {
             return Err(Error::FrameTooLarge);
         }
-        let mut f = self.begin(pose)?;
-        f.report.rejected_depth += each_pixel(image, |p, l| self.add_point(&mut f, p, &l));
+        let mut f = self.begin_frame(pose)?;
+        f.report.rejected_depth += image.for_each_point(|p, l| self.add_point(&mut f, p, &l));
         Ok(self.finish(f))
     }
 
-    fn begin(&mut self, pose: &Isometry3<f32>) -> Result<Frame, Error> {
-        let t = pose.translation.vector;
-        let q = pose.rotation.quaternion();
-        let finite = t.iter().chain(q.coords.iter()).all(|x| x.is_finite());
-        if !finite || (q.norm_squared() - 1.0).abs() > 1e-3 {
-            return Err(Error::InvalidPose);
-        }
-        let h = self.config.cell_size;
-        let origin = [t.x, t.y, t.z];
-        let inv_h = 1.0 / h;
-        let origin_s = [t.x * inv_h, t.y * inv_h, t.z * inv_h];
-        let ok = |s: f32| axis_key(s).map(|k| k as i32);
-        let origin_key = match (ok(origin_s[0]), ok(origin_s[1]), ok(origin_s[2])) {
-            (Some(x), Some(y), Some(z)) => VoxelKey::from_ints(x, y, z),
-            _ => None,
-        }
-        .ok_or(Error::PoseOutOfRange)?;
-
-        // Frame stamps run 1..=65535; whenever they start over (also when the u32 frame
-        // count wraps, or after loading a snapshot), forget all old stamps.
-        let stamp = (self.stats.frames % 65535) as u16 + 1;
-        if stamp == 1 {
-            for b in self.blocks.slots.iter_mut() {
-                b.stamp = 0;
-            }
-        }
-        let qscale = (1u32 << self.config.quant_bits) as f32;
-        Ok(Frame {
-            rot: *pose.rotation.to_rotation_matrix().matrix(),
-            origin,
-            origin_s,
-            origin_key,
-            stamp,
-            h,
-            inv_h,
-            inv_quantum: inv_h * qscale,
-            t_min: -(crate::key::KEY_LIMIT as f32) * qscale,
-            t_max: (crate::key::KEY_LIMIT + 1) as f32 * qscale,
-            quant_bits: self.config.quant_bits as u32,
-            quant_mask: (1 << self.config.quant_bits) - 1,
-            qscale,
-            qhalf: 1 << (self.config.quant_bits - 1),
-            max_range: self.config.max_range,
-            head: NIL,
-            block_cache: (0, 0),
-            voxel_cache: (0, 0),
-            run: Run::EMPTY,
-            voxels_exhausted: false,
-            blocks_exhausted: false,
-            report: FrameReport::default(),
-            evicted_before: (self.stats.voxels_evicted, self.stats.blocks_evicted),
-        })
-    }
-
-    /// Phase 1 for one point `p` in the sensor frame.
-    #[inline]
-    fn add_point(&mut self, f: &mut Frame, p: [f32; 3], labels: &Labels) {
-        let r2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
-        if !(r2.is_finite() && r2 > 0.0) {
-            f.report.rejected_depth += 1;
-            return;
-        }
-        let n = labels.len as usize;
-        if n > MAX_TOP_K || labels.classes[..n].iter().any(|&c| c as usize > C) {
-            f.report.rejected_label += 1;
-            return;
-        }
-        let w = f.to_world(&p);
-        if r2 > f.max_range * f.max_range {
-            self.add_truncated(f, &w, libm::sqrtf(r2));
-            return;
-        }
-        let Some((key, q)) = f.quantise(&w) else {
-            f.report.rejected_out_of_range += 1;
-            return;
-        };
-        let packed_block = key.block();
-        let bs = if f.block_cache.0 == packed_block {
-            f.block_cache.1
-        } else {
-            match self.frame_block(f, packed_block, true) {
-                Some(bs) => bs,
-                None => {
-                    f.report.dropped_points += 1;
-                    return;
-                }
-            }
-        };
-        let bit = 1u64 << key.cell();
-        let packed = key.packed();
-        let vs = if self.blocks.slots[bs].hit & bit == 0 {
-            // First point of this voxel in this frame.
-            let vs = if self.blocks.slots[bs].surface & bit != 0 {
-                self.voxels.find(packed)
-            } else {
-                None
-            };
-            let vs = match vs {
-                Some(vs) => vs,
-                None => match self.create_voxel(f, &key) {
-                    Some(vs) => vs,
-                    None => {
-                        f.report.dropped_points += 1;
-                        return;
-                    }
-                },
-            };
-            let b = &mut self.blocks.slots[bs];
-            b.hit |= bit;
-            b.surface |= bit;
-            self.voxels.slots[vs].make_vote_room(self.config.votes_per_frame);
-            vs
-        } else if f.voxel_cache.0 == packed {
-            f.voxel_cache.1
-        } else {
-            match self.voxels.find(packed) {
-                Some(vs) => vs,
-                None => {
-                    f.report.dropped_points += 1;
-                    return;
-                }
-            }
-        };
-        if f.run.slot != vs {
-            self.flush_run(f);
-            f.run.slot = vs;
-        }
-        f.voxel_cache = (packed, vs);
-        f.run.add(q);
-        let votes = self.has_vote(labels);
-        let v = &mut self.voxels.slots[vs];
-        let exponent = (v.tally >> EXPONENT_SHIFT) as u8;
-        if votes && (exponent == 0 || takes_vote(vote_hash(&p), exponent)) {
-            let taken = (v.tally & VOTES_TAKEN_MAX) + 1;
-            v.tally = (v.tally & !VOTES_TAKEN_MAX) | taken.min(VOTES_TAKEN_MAX);
-            let k = (self.config.top_k as usize).min(n);
-            for i in 0..k {
-                let c = labels.classes[i] as usize;
-                if c >= 1 && labels.scores[i] >= self.config.min_score {
-                    v.hist[c - 1] = v.hist[c - 1].saturating_add(1);
-                }
-            }
-        }
-        f.report.points_used += 1;
-    }
-
-    /// Whether any of a point's (valid) labels votes: one of its first `top_k` labels is a
-    /// class (not void) with a score of at least `min_score`.
-    #[inline]
-    fn has_vote(&self, labels: &Labels) -> bool {
-        let k = (self.config.top_k as usize).min(labels.len as usize);
-        (0..k).any(|i| labels.classes[i] >= 1 && labels.scores[i] >= self.config.min_score)
-    }
-
-    fn add_truncated(&mut self, f: &mut Frame, w: &[f32; 3], range: f32) {
-        let scale = f.max_range / range;
-        let mut k = [0i16; 3];
-        for i in 0..3 {
-            let e = f.origin[i] + (w[i] - f.origin[i]) * scale;
-            match axis_key(e * f.inv_h) {
-                Some(v) => k[i] = v,
-                None => {
-                    f.report.rejected_out_of_range += 1;
-                    return;
-                }
-            }
-        }
-        let key = VoxelKey {
-            x: k[0],
-            y: k[1],
-            z: k[2],
-        };
-        match self.frame_block(f, key.block(), true) {
-            Some(bs) => {
-                self.blocks.slots[bs].far |= 1u64 << key.cell();
-                f.report.truncated += 1;
-            }
-            None => f.report.dropped_points += 1,
-        }
-    }
-
-    fn create_voxel(&mut self, f: &mut Frame, key: &VoxelKey) -> Option<usize> {
-        if self.voxels.is_full() && !f.voxels_exhausted {
-            // Within a frame the evictable set only shrinks: once a scan finds nothing,
-            // later inserts of this frame skip the O(capacity) scan.
-            f.voxels_exhausted = self.evict_voxels(&f.origin_key, f.stamp) == 0;
-            f.voxel_cache = (0, 0);
-        }
-        let vs = self.voxels.insert(Voxel::new(key)).ok()?;
-        f.report.voxels_created += 1;
-        Some(vs)
-    }
-
-    /// The block with packed key `packed`, created if missing, with per-frame masks
-    /// current. `link` puts a newly touched block on the frame's list (phase 1).
-    fn frame_block(&mut self, f: &mut Frame, packed: u64, link: bool) -> Option<usize> {
-        if f.block_cache.0 == packed {
-            return Some(f.block_cache.1);
-        }
-        let bs = match self.blocks.find(packed) {
-            Some(bs) => bs,
-            None => {
-                if self.blocks.is_full() && !f.blocks_exhausted {
-                    f.blocks_exhausted = self.evict_blocks(&f.origin_key, f.stamp) == 0;
-                    f.voxel_cache = (0, 0);
-                }
-                let bs = self.blocks.insert(Block::new(packed)).ok()?;
-                f.report.blocks_created += 1;
-                bs
-            }
-        };
-        let b = &mut self.blocks.slots[bs];
-        if b.touch(f.stamp) && link {
-            b.frame_next = f.head;
-            f.head = bs as u32 + 1;
-        }
-        f.block_cache = (packed, bs);
-        Some(bs)
-    }
-
-    /// Adds the pending run of points (consecutive points in one voxel, summed in
-    /// registers) to its voxel. Integer sums make this exact.
-    fn flush_run(&mut self, f: &mut Frame) {
-        if f.run.n > 0 {
-            if let Some(v) = self.voxels.slots.get_mut(f.run.slot) {
-                v.merge(&f.run);
-            }
-        }
-        f.run = Run::EMPTY;
-    }
-
-    fn finish(&mut self, mut f: Frame) -> FrameReport {
+    /// Phases 2 and 3 after the frame's last point, then the frame's totals.
+    fn finish(&mut self, mut f: FrameState) -> FrameReport {
         self.flush_run(&mut f);
         let head = self.sort_frame_list(f.head);
+        self.update_end_voxels(&mut f, head);
+        self.clear_free_space(&mut f, head);
+        self.close_frame(f)
+    }
+
+    /// Phase 2 along the sorted frame list from `head`: every voxel that received points
+    /// decays to `n_max`, ends its vote sample, and gets one hit.
+    fn update_end_voxels(&mut self, f: &mut FrameState, head: u32) {
         let cfg = self.config;
         let (lo, hi) = (to_fixed(cfg.clamp_min), to_fixed(cfg.clamp_max));
         let hit = to_fixed(cfg.hit);
-
-        // Phase 2: decay and one hit per end voxel.
         let mut i = head;
         while i != NIL {
             let bs = (i - 1) as usize;
@@ -584,388 +102,137 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 if let Some(vs) = self.voxels.find(key.packed()) {
                     let v = &mut self.voxels.slots[vs];
                     v.decay(cfg.n_max);
-                    let exponent = (v.tally >> EXPONENT_SHIFT) as u8;
-                    let taken = v.tally & VOTES_TAKEN_MAX;
-                    let next = next_vote_exponent(exponent, taken, cfg.votes_per_frame);
-                    v.tally = (next as u16) << EXPONENT_SHIFT;
+                    v.end_vote_sample(cfg.votes_per_frame);
                 }
                 self.blocks.slots[bs].add_logodds(cell, hit, lo, hi);
                 f.report.end_voxels += 1;
             }
             i = b.frame_next;
         }
+    }
+}
 
-        // Phase 3: rays in sorted order.
-        let mut cache = GaussCache::new();
-        let mut i = head;
-        while i != NIL {
-            let bs = (i - 1) as usize;
-            let b = self.blocks.slots[bs];
-            for cell in bits(b.hit) {
-                let key = VoxelKey::from_block_cell(b.packed_key(), cell);
-                let target = match self.voxels.find(key.packed()) {
-                    Some(vs) => mean_in_voxel(&self.voxels.slots[vs], &key, f.qscale),
-                    None => centre(&key),
-                };
-                self.cast(&mut f, &mut cache, target, &key, false);
-            }
-            for cell in bits(b.far & !b.hit) {
-                let key = VoxelKey::from_block_cell(b.packed_key(), cell);
-                self.cast(&mut f, &mut cache, centre(&key), &key, true);
-            }
-            i = b.frame_next;
-        }
+#[cfg(test)]
+mod tests {
+    extern crate std;
 
-        self.stats.frames = self.stats.frames.wrapping_add(1);
-        self.stats.dropped_points += f.report.dropped_points as u64;
-        self.stats.dropped_misses += f.report.dropped_misses as u64;
-        f.report.voxels_evicted = (self.stats.voxels_evicted - f.evicted_before.0) as u32;
-        f.report.blocks_evicted = (self.stats.blocks_evicted - f.evicted_before.1) as u32;
-        f.report
+    use super::*;
+    use crate::testutil::*;
+    use crate::*;
+    use std::vec::Vec;
+
+    #[test]
+    fn decay_through_integrate() {
+        let mut cfg = Config::DEFAULT;
+        cfg.n_max = 4;
+        let mut map: Map<16, 16, 2> = Map::try_new(cfg).unwrap();
+        let pts = [lp(0.05, 0.05, 1.05, 1); 10];
+        map.integrate(&Isometry3::identity(), &pts).unwrap();
+        // 10 -> 5 -> 3.
+        assert_eq!(map.gaussian_at(&[0.05, 0.05, 1.05]).unwrap().count, 3);
     }
 
-    /// Exact voxel traversal (Amanatides & Woo) from the sensor to `target` (in voxel
-    /// units), giving each traversed voxel its miss; `end` itself only if `include_end`.
-    fn cast(
-        &mut self,
-        f: &mut Frame,
-        cache: &mut GaussCache,
-        target: [f32; 3],
-        end: &VoxelKey,
-        include_end: bool,
-    ) {
-        f.report.rays += 1;
-        let o = f.origin_s;
-        let d = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
-        let len_s = libm::sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-        let ray = Ray {
-            origin: f.origin,
-            dir: if len_s > 0.0 {
-                [d[0] / len_s, d[1] / len_s, d[2] / len_s]
-            } else {
-                [0.0, 0.0, 1.0]
-            },
-            len: len_s * f.h,
-            measured: !include_end,
-        };
-        let start = [
-            f.origin_key.x as i32,
-            f.origin_key.y as i32,
-            f.origin_key.z as i32,
-        ];
-        let e = [end.x as i32, end.y as i32, end.z as i32];
-        traverse(o, target, start, e, include_end, |k| {
-            self.miss(f, cache, &ray, &k)
-        });
+    #[test]
+    fn hit_and_constant_miss_fixed_point() {
+        let mut map: Map<64, 64, 2> = Map::new(Config::DEFAULT);
+        let pts = [lp(0.05, 0.05, 1.05, 1); 3];
+        let r = map.integrate(&Isometry3::identity(), &pts).unwrap();
+        assert_eq!((r.end_voxels, r.rays), (1, 1));
+        assert_eq!(to_fixed(0.85), 870);
+        assert_eq!(to_fixed(-0.4), -410);
+        assert_eq!(fixed(&map, &key(0, 0, 10)), 870);
+        for z in 0..10 {
+            // No Gaussian on the way: the constant miss, once per frame.
+            assert_eq!(fixed(&map, &key(0, 0, z)), -410, "z={z}");
+        }
+        assert_eq!(fixed(&map, &key(0, 0, 11)), 0);
+        // Clamping: many frames saturate at the configured bounds.
+        for _ in 0..10 {
+            map.integrate(&Isometry3::identity(), &pts).unwrap();
+        }
+        assert_eq!(fixed(&map, &key(0, 0, 10)), to_fixed(3.5));
+        assert_eq!(fixed(&map, &key(0, 0, 3)), to_fixed(-2.0));
+        assert_eq!(map.occupancy(&key(0, 0, 10)), Occupancy::Occupied);
+        assert_eq!(map.occupancy(&key(0, 0, 3)), Occupancy::Free);
+        assert_eq!(map.occupancy(&key(5, 5, 5)), Occupancy::Unknown);
     }
 
-    fn miss(&mut self, f: &mut Frame, cache: &mut GaussCache, ray: &Ray, k: &[i32; 3]) {
-        let Some(key) = VoxelKey::from_ints(k[0], k[1], k[2]) else {
-            return;
-        };
-        let Some(bs) = self.frame_block(f, key.block(), false) else {
-            f.report.dropped_misses = f.report.dropped_misses.saturating_add(1);
-            return;
-        };
-        let cell = key.cell();
-        let bit = 1u64 << cell;
-        let b = &self.blocks.slots[bs];
-        if b.missed & bit != 0 {
-            return;
-        }
-        let cfg = &self.config;
-        let mut delta = to_fixed(cfg.miss);
-        if b.surface & bit != 0 && cfg.miss_model == MissModel::NdtOm {
-            if let Some(vs) = self.voxels.find(key.packed()) {
-                let v = &self.voxels.slots[vs];
-                if v.n >= cfg.n_min {
-                    let g = cache.get(vs, v, cfg);
-                    match ndt_om_miss(cfg, ray, &g) {
-                        Some(l) => delta = to_fixed(l),
-                        None => return,
-                    }
+    #[test]
+    fn snapshot_identical_under_point_permutation() {
+        let mut rng = Lcg(99);
+        let mut frames = Vec::new();
+        for f in 0..3 {
+            let mut pts = Vec::new();
+            for i in 0..600 {
+                // Clusters of points (decay with n_max = 16), top-3 labels, some rejects.
+                let c = (i % 12) as f32;
+                let mut p = [
+                    0.3 * c - 1.52 + 0.06 * rng.next() as f32,
+                    0.2 * (c % 3.0) - 0.22 + 0.06 * rng.next() as f32,
+                    1.5 + 0.06 * rng.next() as f32,
+                ];
+                if i % 97 == 0 {
+                    p[2] = 30.0; // truncated at max range
                 }
-            }
-        }
-        let (lo, hi) = (to_fixed(cfg.clamp_min), to_fixed(cfg.clamp_max));
-        let b = &mut self.blocks.slots[bs];
-        b.missed |= bit;
-        b.add_logodds(cell, delta, lo, hi);
-    }
-
-    /// Bottom-up merge sort of the frame's block list by packed key (no allocation).
-    fn sort_frame_list(&mut self, head: u32) -> u32 {
-        let key = |m: &Self, i: u32| m.blocks.slots[(i - 1) as usize].packed_key();
-        let next = |m: &Self, i: u32| m.blocks.slots[(i - 1) as usize].frame_next;
-        let mut list = head;
-        let mut insize = 1usize;
-        loop {
-            let mut p = list;
-            list = NIL;
-            let mut tail = NIL;
-            let mut merges = 0;
-            while p != NIL {
-                merges += 1;
-                let mut q = p;
-                let mut psize = 0;
-                for _ in 0..insize {
-                    psize += 1;
-                    q = next(self, q);
-                    if q == NIL {
-                        break;
-                    }
+                if i % 113 == 0 {
+                    p[0] = f32::NAN;
                 }
-                let mut qsize = insize;
-                while psize > 0 || (qsize > 0 && q != NIL) {
-                    let e;
-                    if psize == 0 {
-                        e = q;
-                        q = next(self, q);
-                        qsize -= 1;
-                    } else if qsize == 0 || q == NIL || key(self, p) <= key(self, q) {
-                        e = p;
-                        p = next(self, p);
-                        psize -= 1;
-                    } else {
-                        e = q;
-                        q = next(self, q);
-                        qsize -= 1;
-                    }
-                    if tail == NIL {
-                        list = e;
-                    } else {
-                        self.blocks.slots[(tail - 1) as usize].frame_next = e;
-                    }
-                    tail = e;
-                }
-                p = q;
+                let l = Labels::top_k(&[
+                    (1 + (i % 4) as u8, 200),
+                    (1 + (i % 3) as u8, (rng.next() * 255.0) as u8),
+                    ((i % 5) as u8, 90),
+                ]);
+                pts.push(LabeledPoint::new(Point3::new(p[0], p[1], p[2]), l));
             }
-            if tail != NIL {
-                self.blocks.slots[(tail - 1) as usize].frame_next = NIL;
+            let pose = Isometry3::from_parts(
+                Translation3::new(0.1 * f as f32, -0.05, 0.02),
+                UnitQuaternion::from_euler_angles(0.0, 0.1 * f as f32, 0.05),
+            );
+            frames.push((pose, pts));
+        }
+        let mut cfg = Config::DEFAULT;
+        cfg.n_max = 16;
+        cfg.top_k = 3;
+        cfg.min_score = 100;
+        cfg.max_range = 3.0;
+        let mut used = 0u32;
+        let mut maps: Vec<std::boxed::Box<Map<1024, 1024, 6>>> = (0..3)
+            .map(|_| std::boxed::Box::new(Map::new(cfg)))
+            .collect();
+        for (pose, pts) in &frames {
+            let mut rev = pts.clone();
+            rev.reverse();
+            let mut shuffled = pts.clone();
+            for i in (1..shuffled.len()).rev() {
+                let j = (rng.next() * (i + 1) as f64) as usize;
+                shuffled.swap(i, j);
             }
-            if merges <= 1 {
-                return list;
+            let mut reports: Vec<FrameReport> = Vec::new();
+            for (m, order) in maps.iter_mut().zip([pts, &rev, &shuffled]) {
+                let r = m.integrate(pose, order).unwrap();
+                assert_eq!(
+                    (r.voxels_evicted, r.blocks_evicted, r.dropped_points),
+                    (0, 0, 0)
+                );
+                assert_eq!(r.dropped_misses, 0);
+                reports.push(r);
             }
-            insize *= 2;
+            assert_eq!(reports[0], reports[1]);
+            assert_eq!(reports[0], reports[2]);
+            assert!(reports[0].truncated > 0 && reports[0].rejected_depth > 0);
+            used += reports[0].points_used;
         }
+        let s0 = snapshot(&*maps[0]);
+        assert_eq!(s0, snapshot(&*maps[1]));
+        assert_eq!(s0, snapshot(&*maps[2]));
+        assert_eq!(maps[0].checksum(), maps[2].checksum());
+        assert_eq!(
+            maps[0].checksum(),
+            u32::from_le_bytes(s0[s0.len() - 4..].try_into().unwrap())
+        );
+        // Decay happened (else this test would not cover it): fewer points kept than used.
+        let kept: u32 = maps[0].voxels().map(|v| v.gaussian.count).sum();
+        assert!(maps[0].voxels().all(|v| v.gaussian.count <= 16));
+        assert!(kept < used, "kept {kept} of {used}");
     }
-}
-
-/// Calls `visit` with every valid pixel's point (sensor frame) and labels, in row-major
-/// order at the image's stride; returns how many pixels had an invalid depth.
-fn each_pixel(image: &DepthImage<'_>, mut visit: impl FnMut([f32; 3], Labels)) -> u32 {
-    let cam = &image.camera;
-    let stride = image.stride as usize;
-    let (w, h) = (cam.width as usize, cam.height as usize);
-    let (ifx, ify) = (1.0 / cam.fx, 1.0 / cam.fy);
-    let mut invalid = 0;
-    for row in (0..h).step_by(stride) {
-        let ry = (row as f32 + 0.5 - cam.cy) * ify;
-        for col in (0..w).step_by(stride) {
-            let i = row * w + col;
-            let d = image.depth[i];
-            if !(d.is_finite() && d > 0.0) {
-                invalid += 1;
-                continue;
-            }
-            let r = [(col as f32 + 0.5 - cam.cx) * ifx, ry, 1.0];
-            let scale = match image.kind {
-                DepthKind::Planar => d,
-                DepthKind::Range => d / libm::sqrtf(r[0] * r[0] + r[1] * r[1] + 1.0),
-            };
-            let labels = match image.labels {
-                LabelImage::None => Labels::NONE,
-                LabelImage::Top1(l) => Labels::top1(l[i]),
-                LabelImage::TopK(l) => l[i],
-            };
-            visit([r[0] * scale, r[1] * scale, scale], labels);
-        }
-    }
-    invalid
-}
-
-/// The vote-sampling hash of a point (sensor frame): a mix of its coordinates' bits, so
-/// the sample a voxel takes does not depend on point order (see
-/// [`crate::Config::votes_per_frame`]).
-///
-/// ```
-/// let h = sndt_core::vote_hash(&[0.1, -0.2, 1.5]);
-/// assert_eq!(h, sndt_core::vote_hash(&[0.1, -0.2, 1.5]));
-/// assert_ne!(h, sndt_core::vote_hash(&[0.1, -0.2, 1.5001]));
-/// ```
-pub fn vote_hash(p: &[f32; 3]) -> u32 {
-    let mut h = p[0].to_bits().wrapping_mul(0x9e37_79b1);
-    h = (h ^ p[1].to_bits()).wrapping_mul(0x85eb_ca77);
-    h = (h ^ p[2].to_bits()).wrapping_mul(0xc2b2_ae3d);
-    // murmur3's finaliser
-    h ^= h >> 16;
-    h = h.wrapping_mul(0x85eb_ca6b);
-    h ^= h >> 13;
-    h = h.wrapping_mul(0xc2b2_ae35);
-    h ^ (h >> 16)
-}
-
-/// Whether a point with sampling hash `hash` votes in a voxel whose sample keeps one voting
-/// point in `2^exponent` (`exponent <= 15`): the hash's top `exponent` bits are zero.
-///
-/// ```
-/// assert!(sndt_core::takes_vote(u32::MAX, 0));
-/// assert!(sndt_core::takes_vote(0x3fff_ffff, 2) && !sndt_core::takes_vote(0x4000_0000, 2));
-/// ```
-pub fn takes_vote(hash: u32, exponent: u8) -> bool {
-    (hash as u64) >> (32 - exponent.min(MAX_VOTE_EXPONENT) as u32) == 0
-}
-
-/// Largest vote sampling exponent (one point in 32768).
-pub const MAX_VOTE_EXPONENT: u8 = 15;
-
-/// The sampling exponent of a voxel's next frame: the smallest `k` with
-/// `taken * 2^exponent <= votes_per_frame * 2^k` (at most [`MAX_VOTE_EXPONENT`]), where
-/// `taken` votes were sampled at one in `2^exponent` this frame. So a voxel seen about as
-/// densely next frame takes between half and all of `votes_per_frame` votes.
-///
-/// ```
-/// use sndt_core::next_vote_exponent;
-/// assert_eq!(next_vote_exponent(0, 64, 64), 0);
-/// assert_eq!(next_vote_exponent(0, 65, 64), 1);
-/// assert_eq!(next_vote_exponent(2, 100, 64), 3); // about 400 voting points
-/// assert_eq!(next_vote_exponent(5, 0, 64), 0); // no votes taken: count them all
-/// ```
-pub fn next_vote_exponent(exponent: u8, taken: u16, votes_per_frame: u8) -> u8 {
-    let estimate = (taken as u64) << exponent.min(MAX_VOTE_EXPONENT);
-    let budget = votes_per_frame.max(1) as u64;
-    let mut k = 0;
-    while k < MAX_VOTE_EXPONENT && estimate > budget << k {
-        k += 1;
-    }
-    k
-}
-
-/// Exact voxel traversal (Amanatides & Woo) of the segment from `o` to `target` (voxel
-/// units) starting in voxel `start` and ending in `end`, visiting `end` only if
-/// `include_end`. Axis ties step the lowest axis first; at most the Manhattan distance
-/// between the keys plus one voxels are visited.
-fn traverse(
-    o: [f32; 3],
-    target: [f32; 3],
-    start: [i32; 3],
-    end: [i32; 3],
-    include_end: bool,
-    mut visit: impl FnMut([i32; 3]),
-) {
-    let d = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
-    let mut dda = Dda::new(o, d, start);
-    let steps: u32 = (0..3).map(|a| (end[a] - start[a]).unsigned_abs()).sum();
-    for _ in 0..=steps {
-        if dda.k == end {
-            if include_end {
-                visit(end);
-            }
-            return;
-        }
-        visit(dda.k);
-        let (a, t) = dda.next_axis();
-        if t > 1.0 + 1e-4 {
-            return;
-        }
-        dda.advance(a);
-    }
-}
-
-/// Visits every voxel the segment from `from` to `to` (metres) passes through, in order,
-/// both end voxels included: the same traversal the map uses for free space. Returns
-/// `false` (visiting nothing) when an end is outside the key range.
-///
-/// ```
-/// use sndt_core::{voxels_on_segment, VoxelKey};
-/// let mut seen = Vec::new();
-/// assert!(voxels_on_segment(&[0.05, 0.05, 0.05], &[0.35, 0.15, 0.05], 0.1, |k| seen.push(k)));
-/// assert_eq!(seen.first(), Some(&VoxelKey { x: 0, y: 0, z: 0 }));
-/// assert_eq!(seen.last(), Some(&VoxelKey { x: 3, y: 1, z: 0 }));
-/// assert_eq!(seen.len(), 5);
-/// ```
-pub fn voxels_on_segment(
-    from: &[f32; 3],
-    to: &[f32; 3],
-    cell_size: f32,
-    mut visit: impl FnMut(VoxelKey),
-) -> bool {
-    let (Some(a), Some(b)) = (
-        VoxelKey::from_point(from, cell_size),
-        VoxelKey::from_point(to, cell_size),
-    ) else {
-        return false;
-    };
-    let o = [
-        from[0] / cell_size,
-        from[1] / cell_size,
-        from[2] / cell_size,
-    ];
-    let t = [to[0] / cell_size, to[1] / cell_size, to[2] / cell_size];
-    let ka = [a.x as i32, a.y as i32, a.z as i32];
-    let kb = [b.x as i32, b.y as i32, b.z as i32];
-    traverse(o, t, ka, kb, true, |k| {
-        if let Some(key) = VoxelKey::from_ints(k[0], k[1], k[2]) {
-            visit(key);
-        }
-    });
-    true
-}
-
-/// A free-space ray in world metres.
-struct Ray {
-    origin: [f32; 3],
-    dir: [f32; 3],
-    len: f32,
-    /// True when the ray ends at a measured point (false for max-range truncation).
-    measured: bool,
-}
-
-/// Absolute eigenvalue floor for degenerate voxels: `(h / 1000)^2`.
-pub(crate) fn floor_abs(h: f32) -> f32 {
-    (h * 1e-3) * (h * 1e-3)
-}
-
-/// NDT-OM miss log-odds for a ray through a voxel's Gaussian, or `None` when the point of
-/// the ray closest to the Gaussian lies beyond the ray's end.
-fn ndt_om_miss(cfg: &crate::Config, ray: &Ray, g: &Prepared) -> Option<f32> {
-    let u = Vector3::new(ray.dir[0], ray.dir[1], ray.dir[2]);
-    let s = Vector3::new(ray.origin[0], ray.origin[1], ray.origin[2]);
-    let w = g.inv * u;
-    let a = u.dot(&w);
-    if a.is_nan() || a <= 0.0 {
-        return Some(cfg.miss);
-    }
-    let t = w.dot(&(g.mean - s)) / a;
-    if t > ray.len {
-        return None;
-    }
-    let x = s + u * t;
-    let dx = x - g.mean;
-    let p_n = libm::expf(-0.5 * dx.dot(&(g.inv * dx)));
-    let p_z = if ray.measured {
-        let sigma = cfg.noise_base + cfg.noise_quadratic * ray.len * ray.len;
-        let dz = ray.len - t;
-        libm::expf(-0.5 * dz * dz / (sigma * sigma))
-    } else {
-        0.0
-    };
-    let p = 0.5 - cfg.lambda * p_n * (1.0 - p_z);
-    Some(libm::logf(p / (1.0 - p)))
-}
-
-fn centre(key: &VoxelKey) -> [f32; 3] {
-    [key.x as f32 + 0.5, key.y as f32 + 0.5, key.z as f32 + 0.5]
-}
-
-/// Mean of a voxel's points in voxel units, kept strictly inside the voxel.
-fn mean_in_voxel<const C: usize>(v: &Voxel<C>, key: &VoxelKey, qscale: f32) -> [f32; 3] {
-    let n = v.n.max(1) as f32;
-    let k = [key.x as f32, key.y as f32, key.z as f32];
-    let mut m = [0.0; 3];
-    for i in 0..3 {
-        let off = 0.5 + v.s1[i] as f32 / n / qscale;
-        m[i] = k[i] + off.clamp(0.01, 0.99);
-    }
-    m
 }

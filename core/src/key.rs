@@ -131,6 +131,17 @@ pub(crate) fn floor_i32(s: f32) -> i32 {
     i - ((i as f32 > s) as i32)
 }
 
+/// A packed key as three `u16` (how tables store it: 4-byte alignment, no padding).
+pub(crate) fn split_key(packed: u64) -> [u16; 3] {
+    [(packed >> 32) as u16, (packed >> 16) as u16, packed as u16]
+}
+
+/// The packed key stored as three `u16` by [`split_key`].
+#[inline]
+pub(crate) fn join_key(k: [u16; 3]) -> u64 {
+    ((k[0] as u64) << 32) | ((k[1] as u64) << 16) | k[2] as u64
+}
+
 fn pack(x: i32, y: i32, z: i32) -> u64 {
     let b = |v: i32| ((v + 32768) as u64) & 0xffff;
     (b(x) << 32) | (b(y) << 16) | b(z)
@@ -150,4 +161,97 @@ pub(crate) fn hash(packed: u64) -> u32 {
 /// Canonical order of packed keys: by hash, then by key.
 pub(crate) fn order(packed: u64) -> (u32, u64) {
     (hash(packed), packed)
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use crate::testutil::*;
+    use crate::voxel::Voxel;
+
+    use std::vec::Vec;
+
+    #[test]
+    fn key_from_point_floors() {
+        let h = 0.25;
+        let f = |x: f32| VoxelKey::from_point(&[x, 0.0, 0.0], h).map(|k| k.x);
+        assert_eq!(f(0.0), Some(0));
+        assert_eq!(f(-0.0), Some(0));
+        assert_eq!(f(0.2499), Some(0));
+        assert_eq!(f(0.25), Some(1));
+        assert_eq!(f(-0.0001), Some(-1));
+        assert_eq!(f(-0.25), Some(-1));
+        assert_eq!(f(-0.2501), Some(-2));
+        assert_eq!(f(-1.0), Some(-4));
+        assert_eq!(f(-1.1), Some(-5));
+        assert_eq!(
+            VoxelKey::from_point(&[0.3, -0.3, -2.6], 0.5),
+            Some(key(0, -1, -6))
+        );
+    }
+
+    #[test]
+    fn key_range_limits() {
+        let f = |x: f32| VoxelKey::from_point(&[x, 0.0, 0.0], 1.0).map(|k| k.x);
+        assert_eq!(f(32767.0), Some(32767));
+        assert_eq!(f(32767.5), Some(32767));
+        assert_eq!(f(32768.0), None);
+        assert_eq!(f(-32767.0), Some(-32767));
+        assert_eq!(f(-32766.5), Some(-32767));
+        assert_eq!(f(-32767.5), None);
+        assert_eq!(f(-32768.0), None);
+        assert_eq!(f(f32::NAN), None);
+        assert_eq!(f(f32::INFINITY), None);
+        assert_eq!(f(f32::NEG_INFINITY), None);
+        assert_eq!(f(1e30), None);
+        assert_eq!(VoxelKey::from_point(&[0.0, 0.0, f32::NAN], 1.0), None);
+        assert_eq!(KEY_LIMIT, 32767);
+    }
+
+    #[test]
+    fn key_pack_block_cell_round_trips() {
+        let mut rng = Lcg(5);
+        let mut keys: Vec<VoxelKey> = Vec::new();
+        for x in [
+            -32767i16, -32766, -32765, -32764, -5, -4, -3, -1, 0, 1, 3, 4, 32764, 32767,
+        ] {
+            for y in [-32767i16, -2, 0, 2, 32767] {
+                for z in [-32767i16, -1, 0, 5, 32766] {
+                    keys.push(key(x, y, z));
+                }
+            }
+        }
+        for _ in 0..2000 {
+            let r = |rng: &mut Lcg| (rng.next() * 65535.0) as i32 - 32767;
+            keys.push(key(
+                r(&mut rng) as i16,
+                r(&mut rng) as i16,
+                r(&mut rng) as i16,
+            ));
+        }
+        for k in &keys {
+            let p = k.packed();
+            assert_ne!(p, 0, "{k:?}");
+            assert!(p < 1 << 48);
+            assert_eq!(VoxelKey::unpack(p), *k);
+            let cell = k.cell();
+            assert!(cell < 64);
+            assert_eq!(VoxelKey::from_block_cell(k.block(), cell), *k);
+            // The block is the floor division by 4 on every axis.
+            let b = VoxelKey::unpack(k.block());
+            assert_eq!(
+                [b.x, b.y, b.z],
+                [k.x.div_euclid(4), k.y.div_euclid(4), k.z.div_euclid(4)]
+            );
+            assert_eq!(
+                cell,
+                (k.x.rem_euclid(4) + 4 * k.y.rem_euclid(4) + 16 * k.z.rem_euclid(4)) as u32
+            );
+            assert_eq!(split_key(p), Voxel::<1>::new(k).key);
+        }
+        assert_eq!(key(-32767, 0, 5).chebyshev(&key(32767, 1, -5)), 65534);
+        assert_eq!(key(1, 2, 3).chebyshev(&key(1, 2, 3)), 0);
+    }
 }

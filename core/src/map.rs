@@ -1,10 +1,14 @@
-//! The map: two fixed tables (occupancy blocks, NDT voxels), queries and eviction.
+//! The map: its two fixed tables (occupancy blocks, NDT voxels), construction and the
+//! read-only queries. What changes the map lives with its concern: integration
+//! (`integrate.rs` and the phases it calls), eviction (`evict.rs`), snapshots.
 
-use crate::block::{bits, Block};
-use crate::config::{Config, LOGODDS_ONE};
+use crate::block::Block;
+use crate::config::{Config, MissModel, LOGODDS_ONE};
+use crate::error::Error;
+use crate::gaussian::Gaussian;
 use crate::key::VoxelKey;
 use crate::table::{Entry, Table};
-use crate::voxel::{Gaussian, Voxel};
+use crate::voxel::{argmax, Voxel};
 
 /// Bytes of one occupancy block (64 voxels) in the block table, hash index included.
 pub const BLOCK_BYTES: usize = core::mem::size_of::<Block>();
@@ -71,22 +75,6 @@ impl<const C: usize> VoxelView<'_, C> {
     /// Occupancy state.
     pub fn occupancy(&self) -> Occupancy {
         state(self.log_odds)
-    }
-}
-
-pub(crate) fn argmax(hist: &[u8]) -> Option<(u8, f32)> {
-    let mut best = 0usize;
-    let mut total = 0u32;
-    for (i, &b) in hist.iter().enumerate() {
-        total += b as u32;
-        if b > hist[best] {
-            best = i;
-        }
-    }
-    if total == 0 {
-        None
-    } else {
-        Some((best as u8 + 1, hist[best] as f32 / total as f32))
     }
 }
 
@@ -194,7 +182,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             top_k: 0,
             min_score: 0,
             votes_per_frame: 0,
-            miss_model: crate::MissModel::NdtOm,
+            miss_model: MissModel::NdtOm,
             render_radius: 0.0,
         })
     }
@@ -213,7 +201,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// c.n_max = 1;
     /// assert!(sndt_core::Map::<8, 8, 2>::try_new(c).is_err());
     /// ```
-    pub fn try_new(config: Config) -> Result<Self, crate::Error> {
+    pub fn try_new(config: Config) -> Result<Self, Error> {
         config.validate()?;
         Ok(Self::new(config))
     }
@@ -226,7 +214,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// map.reset(Config::with_cell_size(0.2)).unwrap();
     /// assert_eq!(map.config().cell_size, 0.2);
     /// ```
-    pub fn reset(&mut self, config: Config) -> Result<(), crate::Error> {
+    pub fn reset(&mut self, config: Config) -> Result<(), Error> {
         config.validate()?;
         self.config = config;
         self.voxels.clear();
@@ -344,118 +332,99 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 })
         })
     }
+}
 
-    /// Evicts occupancy blocks (with their NDT voxels) farthest from `center`, not touched
-    /// in frame `stamp`. Returns how many blocks went.
-    pub(crate) fn evict_blocks(&mut self, center: &VoxelKey, stamp: u16) -> u32 {
-        let c = center.block();
-        let dist = |b: &Block| block_distance(b.packed_key(), c);
-        let mut hist = [0u32; BINS];
-        for s in self.blocks.live() {
-            let b = &self.blocks.slots[s];
-            if b.stamp != stamp {
-                hist[bin(dist(b))] += 1;
-            }
-        }
-        let Some(threshold) = threshold(&hist, B) else {
-            return 0;
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use crate::testutil::*;
+    use crate::*;
+    use std::vec::Vec;
+
+    fn check_size<const V: usize, const B: usize, const C: usize>() {
+        let voxel = (56 + C).div_ceil(4) * 4;
+        let bytes = (128 + V * voxel + B * 184).div_ceil(8) * 8;
+        assert_eq!(Map::<V, B, C>::VOXEL_BYTES, voxel, "VOXEL_BYTES C={C}");
+        assert_eq!(
+            Map::<V, B, C>::BYTES,
+            bytes,
+            "BYTES formula V={V} B={B} C={C}"
+        );
+        assert_eq!(
+            core::mem::size_of::<Map<V, B, C>>(),
+            Map::<V, B, C>::BYTES,
+            "size_of V={V} B={B} C={C}"
+        );
+    }
+
+    macro_rules! sizes_c {
+        ($v:literal, $b:literal) => {
+            check_size::<$v, $b, 1>();
+            check_size::<$v, $b, 2>();
+            check_size::<$v, $b, 3>();
+            check_size::<$v, $b, 13>();
+            check_size::<$v, $b, 40>();
+            check_size::<$v, $b, 41>();
         };
-        let mut evicted = 0;
-        for s in 0..B {
-            let b = self.blocks.slots[s];
-            if b.packed_key() == 0 || b.stamp == stamp || bin(dist(&b)) < threshold {
-                continue;
-            }
-            for cell in bits(b.surface) {
-                let key = VoxelKey::from_block_cell(b.packed_key(), cell);
-                if let Some(v) = self.voxels.find(key.packed()) {
-                    self.voxels.remove(v);
-                    self.stats.voxels_evicted += 1;
-                }
-            }
-            self.blocks.remove(s);
-            evicted += 1;
-        }
-        self.stats.blocks_evicted += evicted as u64;
-        evicted
     }
 
-    /// Evicts NDT voxels farthest from `center` that got no points in frame `stamp`; their
-    /// occupancy stays in the block layer. Returns how many went.
-    pub(crate) fn evict_voxels(&mut self, center: &VoxelKey, stamp: u16) -> u32 {
-        let mut hist = [0u32; BINS];
-        for s in self.voxels.live() {
-            let key = self.voxels.slots[s].voxel_key();
-            if !self.hit_this_frame(&key, stamp) {
-                hist[bin(key.chebyshev(center))] += 1;
-            }
-        }
-        let Some(threshold) = threshold(&hist, V) else {
-            return 0;
+    macro_rules! sizes_b {
+        ($($v:literal),*) => {
+            $(
+                sizes_c!($v, 1);
+                sizes_c!($v, 2);
+                sizes_c!($v, 3);
+                sizes_c!($v, 7);
+                sizes_c!($v, 10);
+                sizes_c!($v, 64);
+                sizes_c!($v, 1000);
+            )*
         };
-        let mut evicted = 0;
-        for s in 0..V {
-            let v = &self.voxels.slots[s];
-            if v.packed_key() == 0 {
-                continue;
-            }
-            let key = v.voxel_key();
-            if bin(key.chebyshev(center)) < threshold || self.hit_this_frame(&key, stamp) {
-                continue;
-            }
-            self.voxels.remove(s);
-            if let Some(b) = self.blocks.find(key.block()) {
-                self.blocks.slots[b].surface &= !(1u64 << key.cell());
-            }
-            evicted += 1;
+    }
+
+    #[test]
+    fn memory_contract_exact_size() {
+        sizes_b!(1, 2, 3, 7, 10, 64, 1000);
+        assert_eq!(Map::<4096, 1024, 40>::VOXEL_BYTES, 96);
+        assert_eq!(Map::<1, 1, 40>::VOXEL_BYTES, 96);
+        assert_eq!(BLOCK_BYTES, 184);
+        assert_eq!(MAP_HEADER_BYTES, 128);
+        assert_eq!(core::mem::size_of::<Block>(), 184);
+        assert_eq!(Map::<1, 1, 1>::BYTES, 376); // 128 + 60 + 184 = 372 -> 376
+    }
+
+    /// Regression: `Map::new` promises to replace invalid configs by the default, but `checked()` only
+    /// looks at a few fields. With `clamp_min > clamp_max`, `i32::clamp(lo, hi)` in
+    /// `Block::add_logodds` panics (in release too).
+    #[test]
+    fn map_new_keeps_invalid_config() {
+        let mut bad = Config::DEFAULT;
+        bad.clamp_min = 0.5;
+        bad.clamp_max = 0.25;
+        assert!(bad.validate().is_err());
+        let mut map: Map<16, 16, 1> = Map::new(bad);
+        let r = std::panic::catch_unwind(core::panic::AssertUnwindSafe(|| {
+            map.integrate(&Isometry3::identity(), &[lp(0.05, 0.05, 1.05, 1)])
+                .map(|_| ())
+        }));
+        assert!(r.is_ok(), "integrate panicked on a map built by Map::new");
+        let mut others = Vec::new();
+        for f in [
+            (|c: &mut Config| c.hit = f32::INFINITY) as fn(&mut Config),
+            |c| c.miss = 1.0,
+            |c| c.lambda = 2.0,
+            |c| c.eigen_ratio = 0.0,
+            |c| c.noise_base = 0.0,
+            |c| c.max_range = f32::NAN,
+            |c| c.render_radius = -1.0,
+        ] {
+            let mut c = Config::DEFAULT;
+            f(&mut c);
+            assert!(c.validate().is_err());
+            others.push(*Map::<1, 1, 1>::new(c).config() == Config::DEFAULT);
         }
-        self.stats.voxels_evicted += evicted as u64;
-        evicted
+        assert!(others.iter().all(|ok| *ok), "{others:?}");
     }
-
-    fn hit_this_frame(&self, key: &VoxelKey, stamp: u16) -> bool {
-        match self.blocks.find(key.block()) {
-            Some(b) => {
-                let b = &self.blocks.slots[b];
-                b.stamp == stamp && b.hit & (1u64 << key.cell()) != 0
-            }
-            None => false,
-        }
-    }
-}
-
-/// Distance histogram resolution for eviction.
-const BINS: usize = 512;
-
-/// Distance bins: exact up to 255, then 64 wide, last bin open-ended.
-fn bin(d: u32) -> usize {
-    if d < 256 {
-        d as usize
-    } else {
-        (256 + (d - 256) / 64).min(BINS as u32 - 1) as usize
-    }
-}
-
-fn block_distance(a: u64, b: u64) -> u32 {
-    let d = |s: u32| (((a >> s) & 0xffff) as i32 - ((b >> s) & 0xffff) as i32).unsigned_abs();
-    d(32).max(d(16)).max(d(0))
-}
-
-/// Eviction policy: evict every evictable entry in the farthest distance bins, taking whole
-/// bins from the far end until at least 1/16 of the capacity (at least one entry) goes.
-/// Returns the first bin to evict, or `None` when nothing is evictable.
-fn threshold(hist: &[u32; BINS], capacity: usize) -> Option<usize> {
-    let target = (capacity / 16).max(1) as u32;
-    let mut sum = 0u32;
-    let mut last = None;
-    for b in (0..BINS).rev() {
-        if hist[b] > 0 {
-            sum += hist[b];
-            last = Some(b);
-            if sum >= target {
-                break;
-            }
-        }
-    }
-    last
 }

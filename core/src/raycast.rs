@@ -1,4 +1,5 @@
-//! Ray casting against the map's Gaussians and rendering of label/depth images.
+//! Ray casting against the map's Gaussians (rendering, `render.rs`, casts one ray per
+//! pixel through the same code).
 //!
 //! A ray walks the grid by DDA; around every traversed voxel it examines the 3x3x3
 //! neighbourhood (each neighbour exactly once per ray, by adding only the 9 cells of the new
@@ -18,19 +19,13 @@
 //!   voxel outside that mask has no candidate in its new face, and the face is skipped;
 //! * prepared Gaussians (inverse covariance, offset to the origin, `c`, class, validity) are
 //!   cached by (block slot, cell), so a cache hit needs no voxel lookup;
-//! * pixels are rendered in 8x8 tiles, whose rays visit nearly the same voxels.
 
 use crate::block::bits;
 use crate::dda::Dda;
-use crate::integrate::{floor_abs, Pinhole};
-use crate::key::{hash, VoxelKey};
-use crate::map::{argmax, Map};
-use crate::Error;
-use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
-
-#[cfg(test)]
-#[path = "raycast_tests.rs"]
-mod raycast_tests;
+use crate::key::{hash, VoxelKey, KEY_LIMIT};
+use crate::map::Map;
+use crate::voxel::argmax;
+use nalgebra::{Matrix3, Point3, Vector3};
 
 /// Where a ray first enters an occupied Gaussian.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -44,16 +39,6 @@ pub struct RayHit {
     pub key: VoxelKey,
 }
 
-/// Label written by [`Map::render`] where a ray hits nothing (free space or unknown).
-pub const INVALID_LABEL: u8 = 255;
-
-/// Side of the square pixel tiles [`Map::render`] walks (cache locality only).
-const TILE: u32 = 8;
-
-/// Prepared-Gaussian cache entries of one render (64 bytes each).
-const RENDER_PREPS: usize = 512;
-/// Dilated-surface-mask cache entries of one render (16 bytes each).
-const RENDER_DILATED: usize = 512;
 /// Prepared-Gaussian cache entries of one `raycast`.
 const RAY_PREPS: usize = 4;
 
@@ -76,7 +61,7 @@ struct Prep {
 
 /// Everything cached while the map does not change and the origin stays put (one render
 /// call, or one raycast). `G` prepared Gaussians; `D` dilated masks (0 = no skipping).
-struct Scratch<const G: usize, const D: usize> {
+pub(crate) struct Scratch<const G: usize, const D: usize> {
     preps: [Prep; G],
     /// `(packed block key, dilated surface mask)`, key 0 = empty.
     dilated: [(u64, u64); D],
@@ -86,7 +71,7 @@ struct Scratch<const G: usize, const D: usize> {
 }
 
 impl<const G: usize, const D: usize> Scratch<G, D> {
-    fn new() -> Self {
+    pub(crate) fn new() -> Self {
         const { assert!(G >= 1, "at least one prepared-Gaussian entry") };
         let empty = Prep {
             tag: 0,
@@ -186,7 +171,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     /// [`Map::raycast`] with caches that stay valid while `origin` is unchanged.
-    fn raycast_in<const G: usize, const D: usize>(
+    pub(crate) fn raycast_in<const G: usize, const D: usize>(
         &self,
         s: &mut Scratch<G, D>,
         origin: &Point3<f32>,
@@ -219,7 +204,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             self.examine_box(s, &mut ray, k.map(|v| v - 1), k.map(|v| v + 1));
         }
         // No ray can walk farther than across the whole key range.
-        let max_t = max_t.min(h * 4.0 * (crate::KEY_LIMIT + 1) as f32);
+        let max_t = max_t.min(h * 4.0 * (KEY_LIMIT + 1) as f32);
         let max_steps = ((max_t / h) as u32).saturating_mul(3).saturating_add(12);
         let reach = 2.5 * h;
         for _ in 0..max_steps {
@@ -453,9 +438,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         if v.n < cfg.n_min {
             return p;
         }
-        let g = v
-            .gaussian(cfg.cell_size, cfg.quant_step())
-            .prepare(cfg.eigen_ratio, floor_abs(cfg.cell_size));
+        let g = v.prepared(cfg);
         p.d = origin - g.mean;
         p.inv = g.inv;
         p.c = p.d.dot(&(g.inv * p.d));
@@ -468,75 +451,391 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         );
         p
     }
+}
 
-    /// Renders what a pinhole camera at `pose` (camera to world, OpenCV axes) sees:
-    /// per pixel the class of the first Gaussian hit (0 void, [`INVALID_LABEL`] for
-    /// nothing) and its distance in metres along the ray (0 for nothing). Rays end at
-    /// `config.max_range`. Each pixel gets exactly what [`Map::raycast`] returns for its ray.
-    ///
-    /// ```
-    /// use sndt_core::*;
-    /// // 5 cm between pixels at 2 m: several points per 10 cm voxel.
-    /// let cam = Pinhole { fx: 40.0, fy: 40.0, cx: 4.0, cy: 3.0, width: 8, height: 6 };
-    /// let depth = [2.0f32; 48];
-    /// let labels = [7u8; 48];
-    /// let img = DepthImage { camera: cam, depth: &depth, kind: DepthKind::Planar,
-    ///                        labels: LabelImage::Top1(&labels), stride: 1 };
-    /// let mut map: Map<256, 64, 40> = Map::new(Config::DEFAULT);
-    /// map.integrate_depth(&Isometry3::identity(), &img).unwrap();
-    /// let (mut out, mut dist) = ([0u8; 48], [0f32; 48]);
-    /// map.render(&Isometry3::identity(), &cam, &mut out, &mut dist).unwrap();
-    /// assert!(out.iter().filter(|&&c| c == 7).count() > 30);
-    /// assert!(out.iter().all(|&c| c == 7 || c == INVALID_LABEL));
-    /// ```
-    pub fn render(
-        &self,
-        pose: &Isometry3<f32>,
-        camera: &Pinhole,
-        labels: &mut [u8],
-        distance: &mut [f32],
-    ) -> Result<(), Error> {
-        let n = camera.pixels().ok_or(Error::InvalidImage)?;
-        if !camera.valid() || labels.len() != n || distance.len() != n {
-            return Err(Error::InvalidImage);
+#[cfg(test)]
+pub(crate) mod tests {
+    extern crate std;
+
+    use super::*;
+    use crate::block::Block;
+    use crate::gaussian::PrepCache;
+    use crate::table::Table;
+    use crate::testutil::*;
+    use crate::*;
+    use std::boxed::Box;
+    use std::vec::Vec;
+
+    struct Probe<'a, const B: usize, const N: usize> {
+        blocks: &'a Table<Block, B>,
+        cache: &'a mut PrepCache<N>,
+        block_cache: [(u64, u32); 8],
+        best: Option<RayHit>,
+        origin: Vector3<f32>,
+        u: Vector3<f32>,
+        max_t: f32,
+    }
+
+    pub(crate) fn reference_raycast<
+        const V: usize,
+        const B: usize,
+        const C: usize,
+        const N: usize,
+    >(
+        map: &Map<V, B, C>,
+        cache: &mut PrepCache<N>,
+        origin: &Point3<f32>,
+        dir: &Vector3<f32>,
+        max_t: f32,
+    ) -> Option<RayHit> {
+        let n = dir.norm();
+        let finite = origin.coords.iter().all(|x| x.is_finite());
+        if !(finite && n.is_finite() && n > 0.0 && max_t > 0.0) {
+            return None;
         }
-        let t = pose.translation.vector;
-        let q = pose.rotation.quaternion();
-        if !t.iter().chain(q.coords.iter()).all(|x| x.is_finite())
-            || (q.norm_squared() - 1.0).abs() > 1e-3
-        {
-            return Err(Error::InvalidPose);
-        }
-        let rot = pose.rotation.to_rotation_matrix();
-        let origin = Point3::from(t);
-        let (w, h) = (camera.width, camera.height);
-        // The origin is fixed for the whole image: prepared Gaussians and dilated masks stay
-        // valid (about 41 KiB of stack: 512 x 64 B Gaussians, 512 x 16 B masks; host use).
-        let mut s = Scratch::<RENDER_PREPS, RENDER_DILATED>::new();
-        for ty in (0..h).step_by(TILE as usize) {
-            for tx in (0..w).step_by(TILE as usize) {
-                for row in ty..h.min(ty.saturating_add(TILE)) {
-                    for col in tx..w.min(tx.saturating_add(TILE)) {
-                        let i = row as usize * w as usize + col as usize;
-                        let (Some(l), Some(d)) = (labels.get_mut(i), distance.get_mut(i)) else {
-                            continue;
-                        };
-                        let r = camera.ray(col, row);
-                        let dir = rot * Vector3::new(r[0], r[1], r[2]);
-                        match self.raycast_in(&mut s, &origin, &dir, self.config.max_range) {
-                            Some(hit) => {
-                                *l = hit.class;
-                                *d = hit.t;
-                            }
-                            None => {
-                                *l = INVALID_LABEL;
-                                *d = 0.0;
-                            }
-                        }
-                    }
+        let u = dir / n;
+        let cfg = &map.config;
+        let h = cfg.cell_size;
+        let start = map.voxel_key(&[origin.x, origin.y, origin.z])?;
+        let inv = 1.0 / h;
+        let o = [origin.x * inv, origin.y * inv, origin.z * inv];
+        let k = [start.x as i32, start.y as i32, start.z as i32];
+        let mut dda = Dda::new(o, [u.x, u.y, u.z], k);
+        let mut probe = Probe {
+            blocks: &map.blocks,
+            cache,
+            block_cache: [(0, 0); 8],
+            best: None,
+            origin: Vector3::new(origin.x, origin.y, origin.z),
+            u,
+            max_t,
+        };
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    reference_examine(map, &mut probe, [k[0] + dx, k[1] + dy, k[2] + dz]);
                 }
             }
         }
-        Ok(())
+        let max_t = max_t.min(h * 4.0 * (crate::KEY_LIMIT + 1) as f32);
+        let max_steps = ((max_t / h) as u32).saturating_mul(3).saturating_add(12);
+        for _ in 0..max_steps {
+            let (a, t) = dda.next_axis();
+            let t_enter = t * h;
+            if t_enter > max_t + 2.5 * h {
+                break;
+            }
+            if let Some(best) = probe.best {
+                if t_enter > best.t + 2.5 * h {
+                    break;
+                }
+            }
+            dda.advance(a);
+            let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+            for db in -1..=1 {
+                for dc in -1..=1 {
+                    let mut cell = dda.k;
+                    cell[a] += dda.step(a);
+                    cell[b] += db;
+                    cell[c] += dc;
+                    reference_examine(map, &mut probe, cell);
+                }
+            }
+        }
+        probe.best
+    }
+
+    fn reference_examine<const V: usize, const B: usize, const C: usize, const N: usize>(
+        map: &Map<V, B, C>,
+        p: &mut Probe<'_, B, N>,
+        k: [i32; 3],
+    ) {
+        let Some(key) = VoxelKey::from_ints(k[0], k[1], k[2]) else {
+            return;
+        };
+        let packed = key.block();
+        let i = (((k[0] >> 2) & 1) | (((k[1] >> 2) & 1) << 1) | (((k[2] >> 2) & 1) << 2)) as usize;
+        let (tag, found) = p.block_cache[i];
+        let found = if tag == packed {
+            found
+        } else {
+            let f = p.blocks.find(packed).map_or(0, |s| s as u32 + 1);
+            p.block_cache[i] = (packed, f);
+            f
+        };
+        if found == 0 {
+            return;
+        }
+        let b = &p.blocks.slots[(found - 1) as usize];
+        let cell = key.cell();
+        if b.surface & (1u64 << cell) == 0 || b.cells[cell as usize] <= 0 {
+            return;
+        }
+        let Some(vs) = map.voxels.find(key.packed()) else {
+            return;
+        };
+        let v = &map.voxels.slots[vs];
+        let cfg = &map.config;
+        if v.n < cfg.n_min {
+            return;
+        }
+        let g = p.cache.get(vs, || v.prepared(cfg));
+        let d = p.origin - g.mean;
+        let w = g.inv * p.u;
+        let a = p.u.dot(&w);
+        let bq = 2.0 * w.dot(&d);
+        let c = d.dot(&(g.inv * d));
+        if a.is_nan() || a <= 0.0 {
+            return;
+        }
+        let r2 = cfg.render_radius * cfg.render_radius;
+        let t_star = -bq / (2.0 * a);
+        let e = d + p.u * t_star;
+        let d2 = e.dot(&(g.inv * e));
+        if d2 > r2 || c <= r2 {
+            return;
+        }
+        let t = t_star - libm::sqrtf((r2 - d2) / a);
+        if !(t >= 0.0 && t <= p.max_t) {
+            return;
+        }
+        if p.best
+            .is_none_or(|best| t < best.t || (t == best.t && key < best.key))
+        {
+            let class = argmax(&v.hist).map_or(0, |(c, _)| c);
+            p.best = Some(RayHit { t, class, key });
+        }
+    }
+
+    const ROOM: [([f32; 3], [f32; 3], u8); 14] = [
+        ([-0.1, -0.1, -0.1], [6.1, 5.1, 0.0], 2),
+        ([-0.1, -0.1, 2.8], [6.1, 5.1, 2.9], 22),
+        ([-0.1, -0.1, 0.0], [0.0, 5.1, 2.8], 1),
+        ([6.0, -0.1, 0.0], [6.1, 5.1, 2.8], 1),
+        ([0.0, -0.1, 0.0], [6.0, 0.0, 2.8], 1),
+        ([0.0, 5.0, 0.0], [6.0, 5.1, 2.8], 1),
+        ([0.3, 0.3, 0.0], [2.3, 1.9, 0.55], 4),
+        ([3.5, 2.0, 0.72], [4.7, 2.8, 0.76], 7),
+        ([3.55, 2.05, 0.0], [3.6, 2.1, 0.72], 7),
+        ([4.6, 2.7, 0.0], [4.65, 2.75, 0.72], 7),
+        ([5.6, 1.0, 0.0], [6.0, 2.2, 1.8], 15),
+        ([5.5, 1.1, 1.0], [5.6, 1.6, 1.25], 23),
+        ([2.0, 4.98, 1.2], [3.2, 5.0, 1.9], 11),
+        ([0.5, 4.4, 0.0], [0.8, 4.7, 1.5], 35),
+    ];
+
+    fn cast_room(o: &Vector3<f32>, d: &Vector3<f32>) -> Option<(f32, u8)> {
+        let mut best: Option<(f32, u8)> = None;
+        for (lo, hi, label) in ROOM {
+            let (mut t0, mut t1) = (0.0f32, f32::INFINITY);
+            let mut hit = true;
+            for a in 0..3 {
+                if d[a].abs() < 1e-12 {
+                    if o[a] < lo[a] || o[a] > hi[a] {
+                        hit = false;
+                        break;
+                    }
+                    continue;
+                }
+                let (mut ta, mut tb) = ((lo[a] - o[a]) / d[a], (hi[a] - o[a]) / d[a]);
+                if ta > tb {
+                    core::mem::swap(&mut ta, &mut tb);
+                }
+                t0 = t0.max(ta);
+                t1 = t1.min(tb);
+                if t0 > t1 {
+                    hit = false;
+                    break;
+                }
+            }
+            if hit && best.is_none_or(|(t, _)| t0 < t) {
+                best = Some((t0, label));
+            }
+        }
+        best
+    }
+
+    pub(crate) fn look_at(eye: [f32; 3], target: [f32; 3]) -> Isometry3<f32> {
+        let e = Vector3::from(eye);
+        let f = (Vector3::from(target) - e).normalize();
+        let right = f.cross(&Vector3::z()).normalize();
+        let down = f.cross(&right);
+        let m = Matrix3::from_columns(&[right, down, f]);
+        Isometry3::from_parts(Translation3::from(e), UnitQuaternion::from_matrix(&m))
+    }
+
+    pub(crate) fn orbit(n: usize) -> Vec<Isometry3<f32>> {
+        (0..n)
+            .map(|i| {
+                let a = i as f32 / n as f32 * core::f32::consts::TAU;
+                let eye = [3.0 + 1.2 * libm::cosf(a), 2.5 + libm::sinf(a), 1.5];
+                let target = [
+                    3.0 - 2.5 * libm::cosf(a + 0.6),
+                    2.5 - 2.0 * libm::sinf(a + 0.6),
+                    0.9,
+                ];
+                look_at(eye, target)
+            })
+            .collect()
+    }
+
+    /// Hypersim's field of view at 1/8 of its resolution.
+    pub(crate) const CAM: Pinhole = Pinhole {
+        fx: 886.81 / 8.0,
+        fy: 886.81 / 8.0,
+        cx: 64.0,
+        cy: 48.0,
+        width: 128,
+        height: 96,
+    };
+
+    pub(crate) fn room_frame(pose: &Isometry3<f32>, cam: &Pinhole) -> (Vec<f32>, Vec<u8>) {
+        let n = (cam.width * cam.height) as usize;
+        let (mut depth, mut labels) = (std::vec![0f32; n], std::vec![0u8; n]);
+        for i in 0..n {
+            let r = cam.ray(i as u32 % cam.width, i as u32 / cam.width);
+            let d_cam = Vector3::new(r[0], r[1], r[2]);
+            let norm = d_cam.norm();
+            let d = pose.rotation * (d_cam / norm);
+            if let Some((t, l)) = cast_room(&pose.translation.vector, &d) {
+                depth[i] = t / norm;
+                labels[i] = l;
+            }
+        }
+        (depth, labels)
+    }
+
+    pub(crate) type RoomMap = Map<{ 1 << 16 }, { 1 << 15 }, 40>;
+
+    /// Runs `f` on a thread with room for building big maps in debug builds.
+    pub(crate) fn big_stack(f: impl FnOnce() + Send + 'static) {
+        std::thread::Builder::new()
+            .stack_size(256 << 20)
+            .spawn(f)
+            .unwrap()
+            .join()
+            .unwrap_or_else(|e| std::panic::resume_unwind(e));
+    }
+
+    pub(crate) fn room_map(cell: f32, frames: usize) -> Box<RoomMap> {
+        let mut map = Box::new(RoomMap::new(Config::with_cell_size(cell)));
+        for pose in orbit(frames) {
+            let (depth, labels) = room_frame(&pose, &CAM);
+            let img = DepthImage {
+                camera: CAM,
+                depth: &depth,
+                kind: DepthKind::Planar,
+                labels: LabelImage::Top1(&labels),
+                stride: 1,
+            };
+            let r = map.integrate_depth(&pose, &img).unwrap();
+            assert_eq!(r.dropped_points + r.voxels_evicted, 0, "test map too small");
+        }
+        map
+    }
+
+    /// Single rays from inside and outside the room in many directions, with short `max_t`.
+    #[test]
+    fn raycast_matches_reference() {
+        big_stack(|| {
+            let map = room_map(0.1, 6);
+            let mut cache = PrepCache::<8>::new();
+            let mut state = 12345u32;
+            let mut rnd = move || {
+                state ^= state << 13;
+                state ^= state >> 17;
+                state ^= state << 5;
+                state as f32 / u32::MAX as f32
+            };
+            let mut hits = 0;
+            for i in 0..2000 {
+                let o = Point3::new(rnd() * 8.0 - 1.0, rnd() * 7.0 - 1.0, rnd() * 4.0 - 0.6);
+                let d = Vector3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5);
+                let max_t = [20.0, 1.0, 0.3, f32::INFINITY][i % 4];
+                let want = reference_raycast(&map, &mut cache, &o, &d, max_t);
+                let got = map.raycast(&o, &d, max_t);
+                assert_eq!(
+                    got.map(|h| (h.t.to_bits(), h.class, h.key)),
+                    want.map(|h| (h.t.to_bits(), h.class, h.key)),
+                    "ray {i}"
+                );
+                hits += got.is_some() as usize;
+            }
+            assert!(hits > 400, "{hits}");
+        });
+    }
+
+    /// Surfaces at both ends of the key range: blocks whose cells are partly outside it.
+    #[test]
+    fn raycast_matches_reference_at_key_limit() {
+        let mut map: Box<Map<4096, 1024, 4>> = Box::new(Map::new(Config::with_cell_size(1.0)));
+        for x in [-32766.5f32, 32766.5] {
+            let mut pts = Vec::new();
+            for i in 0..400 {
+                let (u, v) = ((i % 20) as f32 * 0.25 - 2.5, (i / 20) as f32 * 0.25 - 2.5);
+                pts.push(LabeledPoint::new(
+                    Point3::new(x + (i % 3) as f32 * 0.3, u, v),
+                    Labels::top1(2),
+                ));
+            }
+            let origin = Isometry3::translation(x.signum() * 32760.0, 0.3, 0.2);
+            let pts: Vec<_> = pts
+                .iter()
+                .map(|p| LabeledPoint::new(origin.inverse() * p.position, p.labels))
+                .collect();
+            map.integrate(&origin, &pts).unwrap();
+        }
+        let mut cache = PrepCache::<8>::new();
+        let mut hits = 0;
+        for sx in [-1.0f32, 1.0] {
+            for i in 0..200 {
+                let a = i as f32 * 0.031;
+                let o = Point3::new(sx * 32762.0, 0.3 * libm::cosf(a), 0.2 * libm::sinf(a));
+                let d = Vector3::new(sx, 0.4 * libm::sinf(a * 3.0), 0.4 * libm::cosf(a * 2.0));
+                let want = reference_raycast(&map, &mut cache, &o, &d, 50.0);
+                assert_eq!(map.raycast(&o, &d, 50.0), want, "ray {sx} {i}");
+                hits += want.is_some() as usize;
+            }
+        }
+        assert!(hits > 100, "{hits}");
+    }
+
+    /// Regression: `raycast` computes `(max_t / h) as u32 * 3 + 12`: `max_t = inf` (accepted, only
+    /// `max_t > 0` is checked) saturates the cast and overflows the product (debug panic);
+    /// in release the step count wraps to 9 and a wall 2 m away is missed.
+    #[test]
+    fn raycast_with_infinite_max_t() {
+        let mut map: Map<512, 256, 2> = Map::new(Config::DEFAULT);
+        let mut pts = [lp(0.0, 0.0, 0.0, 1); 400];
+        for (i, p) in pts.iter_mut().enumerate() {
+            let (u, v) = ((i % 20) as f32 / 20.0 - 0.5, (i / 20) as f32 / 20.0 - 0.5);
+            p.position = Point3::new(u, v, 2.02);
+        }
+        map.integrate(&Isometry3::identity(), &pts).unwrap();
+        let hit = map.raycast(&Point3::new(0.05, 0.05, 0.0), &Vector3::z(), f32::INFINITY);
+        assert!(hit.is_some_and(|h| (h.t - 2.02).abs() < 0.05));
+    }
+
+    #[test]
+    fn nalgebra_norm_is_libm_sqrt() {
+        // The core's only transcendental through nalgebra is sqrt (`norm`, quaternion from
+        // matrix). In test builds num-traits' `std` feature (from proptest) routes it to
+        // `f32::sqrt`, in firmware builds to `libm::sqrtf`; both are correctly rounded, so they
+        // must agree bit for bit.
+        let mut rng = Lcg(17);
+        for i in 0..20000 {
+            let e = i % 40 - 20;
+            let s = libm::ldexpf(1.0, e);
+            let v = Vector3::new(
+                (rng.next() as f32 - 0.5) * s,
+                (rng.next() as f32 - 0.5) * s,
+                (rng.next() as f32 - 0.5) * s,
+            );
+            assert_eq!(
+                v.norm().to_bits(),
+                libm::sqrtf(v.norm_squared()).to_bits(),
+                "{v}"
+            );
+        }
     }
 }

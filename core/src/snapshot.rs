@@ -20,14 +20,14 @@
 //! equal bytes whatever order they were built in, and duplicates are detectable.
 
 use crate::block::Block;
-use crate::config::{Config, MissModel};
+use crate::config::{to_fixed, Config, MissModel};
 use crate::crc::{crc32, Crc};
-use crate::key::{order, KEY_LIMIT};
-use crate::map::Map;
+use crate::error::Error;
+use crate::key::{join_key, order, split_key, VoxelKey, KEY_LIMIT};
+use crate::map::{Map, MapStats};
 use crate::table::Entry;
-use crate::voxel::{split_key, Voxel, EXPONENT_SHIFT};
-use crate::Error;
-use crate::MAX_VOTE_EXPONENT;
+use crate::votes::MAX_VOTE_EXPONENT;
+use crate::voxel::{scatter, Voxel};
 
 /// Snapshot format version written by this build.
 pub const SNAPSHOT_VERSION: u16 = 2;
@@ -85,8 +85,7 @@ impl Reader<'_> {
         u64::from_le_bytes(self.take())
     }
     fn key(&mut self) -> u64 {
-        let k = [self.u16(), self.u16(), self.u16()];
-        ((k[0] as u64) << 32) | ((k[1] as u64) << 16) | k[2] as u64
+        join_key([self.u16(), self.u16(), self.u16()])
     }
 }
 
@@ -219,7 +218,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         self.voxels.clear();
         self.blocks.clear();
         self.config = config;
-        self.stats = crate::MapStats {
+        self.stats = MapStats {
             frames,
             ..Default::default()
         };
@@ -245,7 +244,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             for x in v.s2.iter_mut() {
                 *x = r.i32();
             }
-            v.tally = (r.u8() as u16) << EXPONENT_SHIFT;
+            v.start_vote_sample(r.u8());
             for x in v.hist.iter_mut() {
                 *x = r.u8();
             }
@@ -254,8 +253,25 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         Ok(())
     }
 
-    /// Checks a snapshot completely without touching the map.
+    /// Checks a snapshot completely without touching the map, in this order: header
+    /// (length, magic, version, class count, reserved bytes), total length, CRC, capacity,
+    /// config, then every block and voxel record.
     fn validate_snapshot(buf: &[u8]) -> Result<(Config, u32, usize, usize), Error> {
+        let h = Self::read_header(buf)?;
+        Self::check_body(buf, &h)?;
+        let config = h.checked_config()?;
+        let mut r = Reader {
+            buf,
+            pos: SNAPSHOT_HEADER_BYTES,
+        };
+        check_blocks(&mut r, h.blocks, h.voxels, &config)?;
+        Self::check_voxels(&mut r, h.blocks, h.voxels, &config)?;
+        Ok((config, h.frames, h.blocks, h.voxels))
+    }
+
+    /// The header fields, after checking the magic, version, class count and reserved
+    /// bytes.
+    fn read_header(buf: &[u8]) -> Result<Header, Error> {
         if buf.len() < SNAPSHOT_HEADER_BYTES + 4 {
             return Err(Error::SnapshotTruncated);
         }
@@ -270,33 +286,23 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             return Err(Error::SnapshotClasses);
         }
         let _writer_capacity = (r.u32(), r.u32());
-        let mut c = Config::DEFAULT;
-        c.cell_size = r.f32();
-        c.eigen_ratio = r.f32();
-        c.hit = r.f32();
-        c.miss = r.f32();
-        c.clamp_min = r.f32();
-        c.clamp_max = r.f32();
-        c.lambda = r.f32();
-        c.noise_base = r.f32();
-        c.noise_quadratic = r.f32();
-        c.max_range = r.f32();
-        c.render_radius = r.f32();
-        c.n_min = r.u32();
-        c.n_max = r.u32();
-        c.quant_bits = r.u8();
-        c.top_k = r.u8();
-        c.min_score = r.u8();
-        let model = r.u8();
-        c.votes_per_frame = r.u8();
+        let (config, model) = read_config(&mut r);
         if r.take::<3>() != [0; 3] {
             return Err(Error::SnapshotCorrupt); // reserved bytes
         }
-        let frames = r.u32();
-        let nb = r.u32() as usize;
-        let nv = r.u32() as usize;
-        let expect = (nb as u64) * SNAPSHOT_BLOCK_BYTES as u64
-            + (nv as u64) * Self::SNAPSHOT_VOXEL_BYTES as u64
+        Ok(Header {
+            config,
+            model,
+            frames: r.u32(),
+            blocks: r.u32() as usize,
+            voxels: r.u32() as usize,
+        })
+    }
+
+    /// The length the header implies, the CRC, and this map's capacity.
+    fn check_body(buf: &[u8], h: &Header) -> Result<(), Error> {
+        let expect = (h.blocks as u64) * SNAPSHOT_BLOCK_BYTES as u64
+            + (h.voxels as u64) * Self::SNAPSHOT_VOXEL_BYTES as u64
             + SNAPSHOT_HEADER_BYTES as u64
             + 4;
         if buf.len() as u64 != expect {
@@ -307,65 +313,15 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         if crc32(&buf[..body]) != stored {
             return Err(Error::SnapshotChecksum);
         }
-        if nb > B || nv > V {
+        if h.blocks > B || h.voxels > V {
             return Err(Error::SnapshotCapacity);
         }
-        c.miss_model = match model {
-            0 => MissModel::NdtOm,
-            1 => MissModel::Constant,
-            _ => return Err(Error::SnapshotCorrupt),
-        };
-        c.validate().map_err(|_| Error::SnapshotCorrupt)?;
-        let (lo, hi) = (
-            crate::config::to_fixed(c.clamp_min),
-            crate::config::to_fixed(c.clamp_max),
-        );
+        Ok(())
+    }
 
-        // Blocks: strictly increasing canonical order, valid keys, clamped log-odds.
-        let block_key_ok = |k: u64| {
-            (0..3).all(|i| {
-                let v = ((k >> (32 - 16 * i)) & 0xffff) as i32 - 32768;
-                (-(KEY_LIMIT + 1) / 4..=KEY_LIMIT / 4).contains(&v)
-            })
-        };
-        let mut last = None;
-        let mut surface_bits = 0usize;
-        for _ in 0..nb {
-            let k = r.key();
-            if !block_key_ok(k) || last.is_some_and(|l| l >= order(k)) {
-                return Err(Error::SnapshotCorrupt);
-            }
-            last = Some(order(k));
-            // Blocks at coordinate -8192 hold one layer of cells at key -32768, outside
-            // the key range: those cells must stay empty.
-            let mut outside = 0u64;
-            for axis in 0..3 {
-                if ((k >> (32 - 16 * axis)) & 0xffff) as i32 - 32768 == -(KEY_LIMIT + 1) / 4 {
-                    for cell in 0..64u32 {
-                        if (cell >> (2 * axis)) & 3 == 0 {
-                            outside |= 1 << cell;
-                        }
-                    }
-                }
-            }
-            for cell in 0..64 {
-                let l = r.i16() as i32;
-                if l < lo || l > hi || (l != 0 && outside & (1 << cell) != 0) {
-                    return Err(Error::SnapshotCorrupt);
-                }
-            }
-            let surface = r.u64();
-            if surface & outside != 0 {
-                return Err(Error::SnapshotCorrupt);
-            }
-            surface_bits += surface.count_ones() as usize;
-        }
-        if surface_bits != nv {
-            return Err(Error::SnapshotCorrupt);
-        }
-
-        // Voxels: strictly increasing canonical order, valid keys and sums, and each one's
-        // surface bit set in its block.
+    /// Voxel records: strictly increasing canonical order, valid keys, counts and sums,
+    /// and each one's surface bit set in its block.
+    fn check_voxels(r: &mut Reader, nb: usize, nv: usize, c: &Config) -> Result<(), Error> {
         let qhalf = 1i64 << (c.quant_bits - 1);
         let mut last = None;
         for _ in 0..nv {
@@ -380,7 +336,6 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             if n == 0 || n > c.n_max {
                 return Err(Error::SnapshotCorrupt);
             }
-            let n = n as i64;
             let mut s1 = [0i64; 3];
             for x in s1.iter_mut() {
                 *x = r.i32() as i64;
@@ -393,34 +348,15 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 return Err(Error::SnapshotCorrupt);
             }
             r.pos += C; // any histogram is valid
-            let bound1 = n * qhalf;
-            let bound2 = n * qhalf * qhalf;
-            if s1.iter().any(|x| x.abs() > bound1) || s2.iter().any(|x| x.abs() > bound2) {
+            if !sums_possible(n as i64, &s1, &s2, qhalf) {
                 return Err(Error::SnapshotCorrupt);
             }
-            // Sums of real points give a positive semi-definite scatter matrix
-            // M = n S2 - S1 S1^T. Decay rounds each scaled sum on its own, which can push M
-            // below that by about n (qhalf + 1/2) per entry (and new points can at most
-            // double it before the next decay), so allow a slack of 2 n (qhalf + 1):
-            // anything beyond cannot come from this map.
-            let m = crate::voxel::scatter(n, &s1, &s2).map(|x| x as i128);
-            let slack = 2 * n as i128 * (qhalf as i128 + 1);
-            let (dx, dy, dz) = (m[0] + slack, m[3] + slack, m[5] + slack);
-            if dx < 0
-                || dy < 0
-                || dz < 0
-                || m[1] * m[1] > dx * dy
-                || m[2] * m[2] > dx * dz
-                || m[4] * m[4] > dy * dz
-            {
-                return Err(Error::SnapshotCorrupt);
-            }
-            let key = crate::key::VoxelKey::unpack(k);
-            if !Self::surface_bit_set(buf, nb, key.block(), key.cell()) {
+            let key = VoxelKey::unpack(k);
+            if !Self::surface_bit_set(r.buf, nb, key.block(), key.cell()) {
                 return Err(Error::SnapshotCorrupt);
             }
         }
-        Ok((c, frames, nb, nv))
+        Ok(())
     }
 
     /// Binary search of the (canonically sorted) block records for a surface bit.
@@ -468,6 +404,269 @@ fn voxel_record_head<const C: usize>(v: &Voxel<C>, out: &mut [u8; 160]) -> usize
     for x in v.s1.iter().chain(v.s2.iter()) {
         w.put(&x.to_le_bytes());
     }
-    w.put(&[(v.tally >> EXPONENT_SHIFT) as u8]);
+    w.put(&[v.vote_exponent()]);
     w.pos
+}
+
+/// Header fields of a snapshot being read.
+struct Header {
+    /// The config as stored, its miss model not yet decoded.
+    config: Config,
+    /// The stored miss model byte.
+    model: u8,
+    frames: u32,
+    blocks: usize,
+    voxels: usize,
+}
+
+impl Header {
+    /// The stored config with its miss model, if it is a valid config.
+    fn checked_config(&self) -> Result<Config, Error> {
+        let mut c = self.config;
+        c.miss_model = match self.model {
+            0 => MissModel::NdtOm,
+            1 => MissModel::Constant,
+            _ => return Err(Error::SnapshotCorrupt),
+        };
+        c.validate().map_err(|_| Error::SnapshotCorrupt)?;
+        Ok(c)
+    }
+}
+
+/// The config fields in the order [`Map::write_snapshot`] writes them, and the miss model
+/// byte (decoded by [`Header::checked_config`]).
+fn read_config(r: &mut Reader) -> (Config, u8) {
+    let mut c = Config::DEFAULT;
+    c.cell_size = r.f32();
+    c.eigen_ratio = r.f32();
+    c.hit = r.f32();
+    c.miss = r.f32();
+    c.clamp_min = r.f32();
+    c.clamp_max = r.f32();
+    c.lambda = r.f32();
+    c.noise_base = r.f32();
+    c.noise_quadratic = r.f32();
+    c.max_range = r.f32();
+    c.render_radius = r.f32();
+    c.n_min = r.u32();
+    c.n_max = r.u32();
+    c.quant_bits = r.u8();
+    c.top_k = r.u8();
+    c.min_score = r.u8();
+    let model = r.u8();
+    c.votes_per_frame = r.u8();
+    (c, model)
+}
+
+/// Block records: strictly increasing canonical order, valid keys, log-odds within the
+/// clamps, nothing in cells outside the key range, and one surface bit per voxel record.
+fn check_blocks(r: &mut Reader, nb: usize, nv: usize, c: &Config) -> Result<(), Error> {
+    let (lo, hi) = (to_fixed(c.clamp_min), to_fixed(c.clamp_max));
+    let block_key_ok = |k: u64| {
+        (0..3).all(|i| {
+            let v = ((k >> (32 - 16 * i)) & 0xffff) as i32 - 32768;
+            (-(KEY_LIMIT + 1) / 4..=KEY_LIMIT / 4).contains(&v)
+        })
+    };
+    let mut last = None;
+    let mut surface_bits = 0usize;
+    for _ in 0..nb {
+        let k = r.key();
+        if !block_key_ok(k) || last.is_some_and(|l| l >= order(k)) {
+            return Err(Error::SnapshotCorrupt);
+        }
+        last = Some(order(k));
+        let outside = cells_outside_key_range(k);
+        for cell in 0..64 {
+            let l = r.i16() as i32;
+            if l < lo || l > hi || (l != 0 && outside & (1 << cell) != 0) {
+                return Err(Error::SnapshotCorrupt);
+            }
+        }
+        let surface = r.u64();
+        if surface & outside != 0 {
+            return Err(Error::SnapshotCorrupt);
+        }
+        surface_bits += surface.count_ones() as usize;
+    }
+    if surface_bits != nv {
+        return Err(Error::SnapshotCorrupt);
+    }
+    Ok(())
+}
+
+/// Cells of packed block `k` outside the key range: blocks at coordinate -8192 hold one
+/// layer of cells at key -32768 (one below `-KEY_LIMIT`), which must stay empty.
+fn cells_outside_key_range(k: u64) -> u64 {
+    let mut outside = 0u64;
+    for axis in 0..3 {
+        if ((k >> (32 - 16 * axis)) & 0xffff) as i32 - 32768 == -(KEY_LIMIT + 1) / 4 {
+            for cell in 0..64u32 {
+                if (cell >> (2 * axis)) & 3 == 0 {
+                    outside |= 1 << cell;
+                }
+            }
+        }
+    }
+    outside
+}
+
+/// Whether sums `n, S1, S2` can come from points of this map: each within `n` times its
+/// largest offset, and a scatter matrix that is positive semi-definite up to the slack
+/// decay's rounding allows.
+fn sums_possible(n: i64, s1: &[i64; 3], s2: &[i64; 6], qhalf: i64) -> bool {
+    let bound1 = n * qhalf;
+    let bound2 = n * qhalf * qhalf;
+    if s1.iter().any(|x| x.abs() > bound1) || s2.iter().any(|x| x.abs() > bound2) {
+        return false;
+    }
+    // Sums of real points give a positive semi-definite scatter matrix
+    // M = n S2 - S1 S1^T. Decay rounds each scaled sum on its own, which can push M
+    // below that by about n (qhalf + 1/2) per entry (and new points can at most
+    // double it before the next decay), so allow a slack of 2 n (qhalf + 1):
+    // anything beyond cannot come from this map.
+    let m = scatter(n, s1, s2).map(|x| x as i128);
+    let slack = 2 * n as i128 * (qhalf as i128 + 1);
+    let (dx, dy, dz) = (m[0] + slack, m[3] + slack, m[5] + slack);
+    !(dx < 0
+        || dy < 0
+        || dz < 0
+        || m[1] * m[1] > dx * dy
+        || m[2] * m[2] > dx * dz
+        || m[4] * m[4] > dy * dz)
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use crate::testutil::*;
+    use crate::*;
+    use std::vec::Vec;
+
+    #[test]
+    fn snapshot_round_trip_and_rejections() {
+        let mut map: Map<64, 32, 3> = Map::new(Config::DEFAULT);
+        let pts: Vec<_> = (0..50)
+            .map(|i| {
+                lp(
+                    0.02 * (i % 7) as f32,
+                    0.03 * (i % 5) as f32,
+                    1.0 + 0.01 * i as f32,
+                    1 + (i % 3) as u8,
+                )
+            })
+            .collect();
+        map.integrate(&Isometry3::identity(), &pts).unwrap();
+        let s = snapshot(&map);
+        let mut copy: Map<64, 32, 3> = Map::new(Config::with_cell_size(0.2));
+        copy.read_snapshot(&s).unwrap();
+        assert_eq!(snapshot(&copy), s);
+        assert_eq!(copy.config(), map.config());
+        // Every truncation and every flipped byte is rejected and leaves the map unchanged.
+        for cut in [0, 10, 87, 88, s.len() - 1] {
+            assert!(copy.read_snapshot(&s[..cut]).is_err());
+        }
+        for i in (0..s.len()).step_by(7) {
+            let mut bad = s.clone();
+            bad[i] ^= 0x10;
+            assert!(copy.read_snapshot(&bad).is_err(), "byte {i}");
+        }
+        assert_eq!(snapshot(&copy), s);
+        // A smaller map rejects it by capacity.
+        let mut small: Map<4, 32, 3> = Map::new(Config::DEFAULT);
+        assert_eq!(small.read_snapshot(&s), Err(Error::SnapshotCapacity));
+        let mut other: Map<64, 32, 4> = Map::new(Config::DEFAULT);
+        assert_eq!(other.read_snapshot(&s), Err(Error::SnapshotClasses));
+        // A voxel count above n_max with a valid CRC is corrupt.
+        let mut bad = s.clone();
+        let first_voxel = SNAPSHOT_HEADER_BYTES + map.block_count() * SNAPSHOT_BLOCK_BYTES;
+        bad[first_voxel + 6..first_voxel + 10].copy_from_slice(&4000u32.to_le_bytes());
+        fix_crc(&mut bad);
+        assert_eq!(copy.read_snapshot(&bad), Err(Error::SnapshotCorrupt));
+        // So is a vote sampling exponent above 15 (byte 46 of a voxel record).
+        let mut bad = s.clone();
+        bad[first_voxel + 46] = 16;
+        fix_crc(&mut bad);
+        assert_eq!(copy.read_snapshot(&bad), Err(Error::SnapshotCorrupt));
+    }
+
+    #[test]
+    fn snapshot_keeps_the_vote_sampling() {
+        // A crowded voxel samples one point in 2^3 after its first frame (500 votes, 64 per
+        // frame); a map read from its snapshot continues exactly like the original.
+        let mut map: Map<16, 16, 2> = Map::new(Config::DEFAULT);
+        let mut rng = Lcg(5);
+        map.integrate(&Isometry3::identity(), &voxel_cloud(&mut rng, 200, 300))
+            .unwrap();
+        let k = key(0, 0, 10);
+        assert_eq!(voxel(&map, &k).tally >> 12, 3);
+        let mut copy: Map<16, 16, 2> = Map::new(Config::DEFAULT);
+        copy.read_snapshot(&snapshot(&map)).unwrap();
+        assert_eq!(voxel(&copy, &k).tally >> 12, 3);
+        let next = voxel_cloud(&mut rng, 100, 400);
+        map.integrate(&Isometry3::identity(), &next).unwrap();
+        copy.integrate(&Isometry3::identity(), &next).unwrap();
+        assert_eq!(snapshot(&copy), snapshot(&map));
+    }
+
+    /// Regression: A snapshot block at block coordinate -8192 covers voxels x = -32768..-32765; the
+    /// reader accepts log-odds in its x = -32768 cells, and `cells()` then reports keys
+    /// outside the documented range `-KEY_LIMIT..=KEY_LIMIT`.
+    #[test]
+    fn snapshot_accepts_cells_outside_key_range() {
+        let mut src: Map<4, 4, 1> = Map::new(Config::DEFAULT);
+        let edge = key(-32767, 0, 0);
+        let mut b = Block::new(edge.block());
+        b.cells[0] = -100; // cell 0 of block -8192 is voxel x = -32768
+        src.blocks.insert(b).unwrap();
+        let s = snapshot(&src);
+        let mut map: Map<4, 4, 1> = Map::new(Config::DEFAULT);
+        let read = map.read_snapshot(&s);
+        let bad: Vec<VoxelKey> = map
+            .cells()
+            .map(|(k, _)| k)
+            .filter(|k| (k.x as i32).abs() > KEY_LIMIT)
+            .collect();
+        assert!(
+            read.is_err() || bad.is_empty(),
+            "accepted cells with keys {bad:?}"
+        );
+    }
+
+    /// Regression: The reader checks |S1| <= n 2^(Q-1) and |S2| <= n 4^(Q-1) but not that the sums can
+    /// come from points (n S2_ii >= S1_i^2): a voxel with S1 = n * 32, S2 = 0 is accepted and
+    /// its Gaussian has a negative variance.
+    #[test]
+    fn snapshot_accepts_impossible_sums() {
+        let mut map: Map<16, 16, 1> = Map::new(Config::DEFAULT);
+        map.integrate(&Isometry3::identity(), &[lp(0.05, 0.05, 1.05, 1); 4])
+            .unwrap();
+        let mut s = snapshot(&map);
+        let v0 = SNAPSHOT_HEADER_BYTES + map.block_count() * SNAPSHOT_BLOCK_BYTES;
+        // Record: key 6, n 4, S1 12, S2 24.
+        s[v0 + 10..v0 + 14].copy_from_slice(&128i32.to_le_bytes()); // S1x = 4 * 32
+        s[v0 + 22..v0 + 26].copy_from_slice(&0i32.to_le_bytes()); // S2xx = 0
+        fix_crc(&mut s);
+        let mut copy: Map<16, 16, 1> = Map::new(Config::DEFAULT);
+        let read = copy.read_snapshot(&s);
+        let var = copy
+            .gaussian(&key(0, 0, 10))
+            .map_or(0.0, |g| g.covariance[(0, 0)]);
+        assert!(read.is_err() || var >= 0.0, "accepted; variance {var}");
+    }
+
+    /// Regression: The 3 reserved bytes of the header must be zero: junk there is rejected.
+    #[test]
+    fn snapshot_rejects_nonzero_reserved_bytes() {
+        let mut map: Map<16, 16, 1> = Map::new(Config::DEFAULT);
+        map.integrate(&Isometry3::identity(), &[lp(0.05, 0.05, 1.05, 1); 4])
+            .unwrap();
+        let mut s = snapshot(&map);
+        s[73] = 0xAB; // reserved bytes 73..76
+        fix_crc(&mut s);
+        let mut copy: Map<16, 16, 1> = Map::new(Config::DEFAULT);
+        assert_eq!(copy.read_snapshot(&s), Err(Error::SnapshotCorrupt));
+    }
 }

@@ -2,10 +2,17 @@
 //!
 //! Slots live in one array; the `head` field of slot `b` holds `slot + 1` of the first entry
 //! of bucket `b` (0 = empty; it belongs to the bucket, not to the entry in the slot, so the
-//! index costs exactly 4 bytes per slot) and entries chain through their own `chain` field, kept sorted in the
-//! canonical order `(hash, key)` so that iteration by bucket is independent of insertion
-//! order. Removed slots go on a free list, so indices of live entries never move. An
-//! all-zero table is a valid empty table (statics land in `.bss`).
+//! index costs exactly 4 bytes per slot) and entries chain through their own `chain` field,
+//! kept sorted in the canonical order `(hash, key)` so that iteration by bucket is
+//! independent of insertion order. Removed slots go on a free list, so indices of live
+//! entries never move. An all-zero table is a valid empty table (statics land in `.bss`).
+//!
+//! Why not `heapless::IndexMap`: it removes by moving the last entry into the hole, so slot
+//! indices (held by blocks, caches and the frame list) would move, and it iterates in
+//! insertion order, where snapshots need an order that depends on the keys alone. Its
+//! capacity must also be a power of two of at most 2^16 (indices are `u16`; maps on a
+//! host hold 2^19 voxels), and an all-zero `IndexMap` is not a valid empty one, so a map
+//! `static` would need a copy in flash instead of landing in `.bss`.
 
 use crate::key::{hash, order};
 
@@ -176,5 +183,174 @@ impl<T: Entry, const N: usize> Table<T, N> {
             i = self.slots[slot].chain();
             Some(slot)
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use crate::testutil::*;
+    use crate::voxel::Voxel;
+    use crate::*;
+    use std::vec::Vec;
+
+    type T1 = Voxel<1>;
+
+    fn entry(k: &VoxelKey) -> T1 {
+        Voxel::<1>::new(k)
+    }
+
+    fn bucket_of(k: &VoxelKey, n: usize) -> usize {
+        ((hash(k.packed()) as u64 * n as u64) >> 32) as usize
+    }
+
+    /// Keys whose hash lands in bucket `b` of an `n`-bucket table.
+    fn colliding(n: usize, b: usize, count: usize) -> Vec<VoxelKey> {
+        let mut out = Vec::new();
+        let mut x = -500i16;
+        while out.len() < count {
+            let k = key(x, 3, -7);
+            if bucket_of(&k, n) == b {
+                out.push(k);
+            }
+            x += 1;
+        }
+        out
+    }
+
+    #[test]
+    fn table_insert_find_remove_with_collisions() {
+        let mut t: Table<T1, 4> = Table::new();
+        let keys = colliding(4, 1, 4);
+        let slots: Vec<usize> = keys.iter().map(|k| t.insert(entry(k)).unwrap()).collect();
+        assert_eq!(slots, [0, 1, 2, 3]);
+        assert_eq!(t.len(), 4);
+        assert!(t.is_full());
+        for (k, s) in keys.iter().zip(&slots) {
+            assert_eq!(t.find(k.packed()), Some(*s));
+            assert_eq!(t.slots[*s].voxel_key(), *k);
+        }
+        // Absent key in the same bucket, and in other buckets.
+        let absent = colliding(4, 1, 5)[4];
+        assert_eq!(t.find(absent.packed()), None);
+        assert_eq!(t.find(key(1, 2, 3).packed()), None);
+        // Full: the entry comes back.
+        let e = entry(&absent);
+        match t.insert(e) {
+            Err(back) => assert_eq!(back, e),
+            Ok(_) => panic!("insert into a full table"),
+        }
+        // Remove from the middle of the chain (by canonical position) and the ends.
+        let canon: Vec<usize> = t.canonical().collect();
+        assert_eq!(canon.len(), 4);
+        let mid = canon[1];
+        let removed = t.remove(mid);
+        assert_eq!(removed.voxel_key(), t_key_of(&keys, &slots, mid));
+        assert_eq!(t.len(), 3);
+        assert_eq!(t.find(removed.packed_key()), None);
+        for (k, s) in keys.iter().zip(&slots) {
+            if *s != mid {
+                assert_eq!(t.find(k.packed()), Some(*s));
+            }
+        }
+        // The freed slot is reused.
+        assert_eq!(t.insert(entry(&absent)), Ok(mid));
+        assert_eq!(t.find(absent.packed()), Some(mid));
+        // Free list is LIFO: remove two, the last removed is handed out first.
+        let first = canon[0];
+        let last = canon[3];
+        t.remove(first);
+        t.remove(last);
+        let a = colliding(4, 1, 7)[5];
+        let b = colliding(4, 1, 7)[6];
+        assert_eq!(t.insert(entry(&a)), Ok(last));
+        assert_eq!(t.insert(entry(&b)), Ok(first));
+        for (k, s) in [(a, last), (b, first), (absent, mid)] {
+            assert_eq!(t.find(k.packed()), Some(s));
+        }
+        assert_eq!(t.live().count(), 4);
+        // Clearing gives an empty table that works again.
+        t.clear();
+        assert_eq!(t.len(), 0);
+        assert_eq!(t.canonical().count(), 0);
+        assert_eq!(t.find(a.packed()), None);
+        assert_eq!(t.insert(entry(&a)), Ok(0));
+    }
+
+    fn t_key_of(keys: &[VoxelKey], slots: &[usize], slot: usize) -> VoxelKey {
+        keys[slots.iter().position(|s| *s == slot).unwrap()]
+    }
+
+    #[test]
+    fn table_single_bucket() {
+        let mut t: Table<T1, 1> = Table::new();
+        assert_eq!(t.insert(entry(&key(1, 1, 1))), Ok(0));
+        assert!(t.insert(entry(&key(2, 1, 1))).is_err());
+        assert_eq!(t.find(key(2, 1, 1).packed()), None);
+        t.remove(0);
+        assert_eq!(t.find(key(1, 1, 1).packed()), None);
+        assert_eq!(t.insert(entry(&key(2, 1, 1))), Ok(0));
+        assert_eq!(t.find(key(2, 1, 1).packed()), Some(0));
+    }
+
+    fn canonical_keys<const N: usize>(t: &Table<T1, N>) -> Vec<u64> {
+        t.canonical().map(|s| t.slots[s].packed_key()).collect()
+    }
+
+    #[test]
+    fn table_canonical_order_is_insertion_independent() {
+        let mut rng = Lcg(3);
+        let mut keys: Vec<VoxelKey> = Vec::new();
+        while keys.len() < 40 {
+            let k = key(
+                (rng.next() * 200.0) as i16 - 100,
+                (rng.next() * 20.0) as i16 - 10,
+                (rng.next() * 6.0) as i16,
+            );
+            if !keys.contains(&k) {
+                keys.push(k);
+            }
+        }
+        let mut a: Table<T1, 48> = Table::new();
+        let mut b: Table<T1, 48> = Table::new();
+        let mut c: Table<T1, 48> = Table::new();
+        for k in &keys {
+            a.insert(entry(k)).unwrap();
+        }
+        for k in keys.iter().rev() {
+            b.insert(entry(k)).unwrap();
+        }
+        // c: insert extra keys first, interleave, then remove the extras (free-list slots).
+        let extra: Vec<VoxelKey> = (0..8).map(|i| key(500 + i, 0, 0)).collect();
+        for k in &extra {
+            c.insert(entry(k)).unwrap();
+        }
+        for k in keys.iter().skip(1).step_by(2) {
+            c.insert(entry(k)).unwrap();
+        }
+        for k in &extra {
+            let s = c.find(k.packed()).unwrap();
+            c.remove(s);
+        }
+        for k in keys.iter().step_by(2) {
+            c.insert(entry(k)).unwrap();
+        }
+        let ka = canonical_keys(&a);
+        assert_eq!(ka.len(), keys.len());
+        assert_eq!(ka, canonical_keys(&b));
+        assert_eq!(ka, canonical_keys(&c));
+        // Canonical order is (hash, key) ascending, whatever the capacity.
+        assert!(ka.windows(2).all(|w| order(w[0]) < order(w[1])));
+        let mut d: Table<T1, 40> = Table::new();
+        for k in keys.iter().rev() {
+            d.insert(entry(k)).unwrap();
+        }
+        assert_eq!(ka, canonical_keys(&d));
+        // live() is the same set.
+        let mut live: Vec<u64> = c.live().map(|s| c.slots[s].packed_key()).collect();
+        live.sort_by_key(|k| order(*k));
+        assert_eq!(live, ka);
     }
 }

@@ -1,5 +1,5 @@
-//! Voxel statistics: integer-quantised point sums, the Gaussian they define, and the `u8`
-//! class histogram.
+//! The surface (NDT) voxel: integer-quantised point sums, the Gaussian they define, and
+//! the `u8` class histogram (its vote sampling lives in `votes.rs`).
 //!
 //! A point `p` in voxel `k` contributes `q = round_half_up((p / h - k - 1/2) 2^Q)` (so
 //! `|q_i| <= 2^(Q-1)`) to `S1 = sum q` and `S2 = sum q q^T`. A voxel holds at most `n_max`
@@ -8,7 +8,9 @@
 //! `|S2_ij| <= 2^10 n = 1,140,849,664 < 2^31`: the sums fit `i32` exactly (see
 //! `sums_cannot_overflow` in the tests) and do not depend on point order.
 
-use crate::key::VoxelKey;
+use crate::config::Config;
+use crate::gaussian::{floor_abs, Gaussian, Prepared};
+use crate::key::{join_key, split_key, VoxelKey};
 use crate::table::Entry;
 use nalgebra::{Matrix3, Vector3};
 
@@ -28,7 +30,7 @@ pub(crate) struct Voxel<const C: usize> {
     pub(crate) key: [u16; 3],
     /// Vote sampling: bits 12..16 hold the exponent `k` (this frame's sample keeps one
     /// voting point in `2^k`), bits 0..12 the votes taken this frame (saturating at
-    /// [`VOTES_TAKEN_MAX`]; 0 between frames).
+    /// `VOTES_TAKEN_MAX`; 0 between frames). Read and written by `votes.rs` only.
     pub(crate) tally: u16,
     /// Class votes; bin `i` is class `i + 1`.
     pub(crate) hist: [u8; C],
@@ -46,7 +48,7 @@ impl<const C: usize> Entry for Voxel<C> {
         hist: [0; C],
     };
     fn packed_key(&self) -> u64 {
-        ((self.key[0] as u64) << 32) | ((self.key[1] as u64) << 16) | self.key[2] as u64
+        join_key(self.key)
     }
     fn chain(&self) -> u32 {
         self.chain
@@ -62,13 +64,37 @@ impl<const C: usize> Entry for Voxel<C> {
     }
 }
 
-/// Largest count of votes taken in one frame that a tally holds.
-pub(crate) const VOTES_TAKEN_MAX: u16 = 0xfff;
-/// Position of the sampling exponent in a tally.
-pub(crate) const EXPONENT_SHIFT: u32 = 12;
+/// Sums `n, S1, S2` of quantised offsets not yet added to a voxel. Integration sums runs
+/// of consecutive points that fall into the same voxel here, in registers, and adds a run
+/// to the voxel once (integer sums: the result is the same as adding point by point).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PointSums {
+    pub(crate) n: u32,
+    pub(crate) s1: [i32; 3],
+    pub(crate) s2: [i32; 6],
+}
 
-pub(crate) fn split_key(packed: u64) -> [u16; 3] {
-    [(packed >> 32) as u16, (packed >> 16) as u16, packed as u16]
+impl PointSums {
+    pub(crate) const EMPTY: PointSums = PointSums {
+        n: 0,
+        s1: [0; 3],
+        s2: [0; 6],
+    };
+
+    /// Adds one quantised offset.
+    #[inline]
+    pub(crate) fn add(&mut self, q: [i32; 3]) {
+        self.n += 1;
+        self.s1[0] += q[0];
+        self.s1[1] += q[1];
+        self.s1[2] += q[2];
+        self.s2[0] += q[0] * q[0];
+        self.s2[1] += q[0] * q[1];
+        self.s2[2] += q[0] * q[2];
+        self.s2[3] += q[1] * q[1];
+        self.s2[4] += q[1] * q[2];
+        self.s2[5] += q[2] * q[2];
+    }
 }
 
 impl<const C: usize> Voxel<C> {
@@ -82,16 +108,17 @@ impl<const C: usize> Voxel<C> {
         VoxelKey::unpack(self.packed_key())
     }
 
-    /// Adds one quantised offset (integration sums runs of points instead, see `Run`).
+    /// Adds one quantised offset (integration adds runs of points instead, see
+    /// [`PointSums`]).
     #[cfg(test)]
     pub(crate) fn add(&mut self, q: [i32; 3]) {
-        let mut run = crate::integrate::Run::EMPTY;
+        let mut run = PointSums::EMPTY;
         run.add(q);
         self.merge(&run);
     }
 
-    /// Adds a run of points summed elsewhere.
-    pub(crate) fn merge(&mut self, run: &crate::integrate::Run) {
+    /// Adds points summed elsewhere.
+    pub(crate) fn merge(&mut self, run: &PointSums) {
         self.n += run.n;
         for i in 0..3 {
             self.s1[i] += run.s1[i];
@@ -128,18 +155,6 @@ impl<const C: usize> Voxel<C> {
         self.n = m as u32;
     }
 
-    /// Halves every bin if any bin exceeds `255 - votes` so a frame's sample of about
-    /// `votes` votes has room (done once per voxel per frame, before the votes, so the
-    /// result does not depend on point order).
-    pub(crate) fn make_vote_room(&mut self, votes: u8) {
-        let limit = 255 - votes;
-        if self.hist.iter().any(|&b| b > limit) {
-            for b in self.hist.iter_mut() {
-                *b /= 2;
-            }
-        }
-    }
-
     /// Mean and covariance in metres (covariance needs `n >= 2`).
     pub(crate) fn gaussian(&self, h: f32, step: f32) -> Gaussian {
         let key = self.voxel_key();
@@ -171,6 +186,12 @@ impl<const C: usize> Voxel<C> {
             count: self.n,
         }
     }
+
+    /// The Gaussian ready for ray tests, with the eigenvalue floors of `cfg`.
+    pub(crate) fn prepared(&self, cfg: &Config) -> Prepared {
+        self.gaussian(cfg.cell_size, cfg.quant_step())
+            .prepare(cfg.eigen_ratio, floor_abs(cfg.cell_size))
+    }
 }
 
 /// Matrix positions of the six stored `S2` entries: xx, xy, xz, yy, yz, zz.
@@ -186,137 +207,202 @@ pub(crate) fn scatter(n: i64, s1: &[i64; 3], s2: &[i64; 6]) -> [i64; 6] {
     m
 }
 
-/// A voxel's normal distribution in world coordinates (metres).
-///
-/// ```
-/// use sndt_core::{Config, LabeledPoint, Labels, Map, Isometry3, Point3};
-/// let mut map: Map<64, 16, 4> = Map::new(Config::DEFAULT);
-/// let pts = [
-///     LabeledPoint::new(Point3::new(0.01, 0.02, 1.01), Labels::top1(1)),
-///     LabeledPoint::new(Point3::new(0.03, 0.02, 1.03), Labels::top1(1)),
-///     LabeledPoint::new(Point3::new(0.05, 0.08, 1.01), Labels::top1(1)),
-/// ];
-/// map.integrate(&Isometry3::identity(), &pts).unwrap();
-/// let g = map.gaussian_at(&[0.03, 0.04, 1.02]).unwrap();
-/// assert_eq!(g.count, 3);
-/// assert!((g.mean.x - 0.03).abs() < 1e-3);
-/// ```
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Gaussian {
-    /// Mean in metres.
-    pub mean: Vector3<f32>,
-    /// Sample covariance in square metres (zero for fewer than 2 points).
-    pub covariance: Matrix3<f32>,
-    /// Number of points (after decay).
-    pub count: u32,
-}
-
-/// A Gaussian ready for ray tests: mean and inverse covariance with the eigenvalue floor.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Prepared {
-    pub(crate) mean: Vector3<f32>,
-    pub(crate) inv: Matrix3<f32>,
-}
-
-/// Direct-mapped cache of prepared Gaussians keyed by voxel slot. Only valid while the
-/// voxels it was filled from do not change (phase 3 of a frame, one render call).
-pub(crate) struct PrepCache<const N: usize> {
-    tags: [u32; N],
-    entries: [Option<Prepared>; N],
-}
-
-impl<const N: usize> PrepCache<N> {
-    pub(crate) const fn new() -> Self {
-        PrepCache {
-            tags: [0; N],
-            entries: [None; N],
+/// Most voted class (1-based) of a histogram and its share of the votes; ties go to the
+/// lower class, and an empty histogram has none.
+pub(crate) fn argmax(hist: &[u8]) -> Option<(u8, f32)> {
+    let mut best = 0usize;
+    let mut total = 0u32;
+    for (i, &b) in hist.iter().enumerate() {
+        total += b as u32;
+        if b > hist[best] {
+            best = i;
         }
     }
-
-    /// The prepared Gaussian of voxel `v` in slot `slot`.
-    pub(crate) fn get<const C: usize>(
-        &mut self,
-        slot: usize,
-        v: &Voxel<C>,
-        cfg: &crate::Config,
-    ) -> Prepared {
-        let i = slot % N;
-        let tag = slot as u32 + 1;
-        if let Some(g) = self.entries[i] {
-            if self.tags[i] == tag {
-                return g;
-            }
-        }
-        let g = v
-            .gaussian(cfg.cell_size, cfg.quant_step())
-            .prepare(cfg.eigen_ratio, crate::integrate::floor_abs(cfg.cell_size));
-        self.tags[i] = tag;
-        self.entries[i] = Some(g);
-        g
+    if total == 0 {
+        None
+    } else {
+        Some((best as u8 + 1, hist[best] as f32 / total as f32))
     }
 }
 
-impl Gaussian {
-    /// Inverse covariance with eigenvalues raised to `ratio * lambda_max` (and to `floor_abs`
-    /// for a degenerate voxel whose points coincide).
-    pub(crate) fn prepare(&self, ratio: f32, floor_abs: f32) -> Prepared {
-        let (vals, vecs) = symmetric_eigen(&self.covariance);
-        let lmax = vals[0].max(vals[1]).max(vals[2]);
-        let floor = (lmax * ratio).max(floor_abs);
-        let mut inv = Matrix3::zeros();
-        for (i, val) in vals.iter().enumerate() {
-            let l = val.max(floor);
-            let v = vecs.column(i);
-            inv += v * v.transpose() * (1.0 / l);
-        }
-        Prepared {
-            mean: self.mean,
-            inv,
-        }
-    }
-}
+#[cfg(test)]
+mod tests {
+    // Reference formulas read best with explicit indices.
+    #![allow(clippy::needless_range_loop)]
 
-/// Eigenvalues and eigenvectors (columns) of a symmetric 3x3 matrix by cyclic Jacobi
-/// rotations. Pure arithmetic plus `libm::sqrtf`, so results are bit-identical on every target.
-pub(crate) fn symmetric_eigen(m: &Matrix3<f32>) -> ([f32; 3], Matrix3<f32>) {
-    let mut a = *m;
-    let mut v = Matrix3::<f32>::identity();
-    for _sweep in 0..12 {
-        let off = a[(0, 1)] * a[(0, 1)] + a[(0, 2)] * a[(0, 2)] + a[(1, 2)] * a[(1, 2)];
-        let diag = a[(0, 0)] * a[(0, 0)] + a[(1, 1)] * a[(1, 1)] + a[(2, 2)] * a[(2, 2)];
-        if off <= diag * 1e-14 || off == 0.0 {
-            break;
+    use super::*;
+    use crate::testutil::*;
+    use crate::*;
+
+    #[test]
+    fn voxel_gaussian_matches_f64_formula() {
+        let qs = [
+            [3, -5, 7],
+            [-2, 4, 1],
+            [10, 0, -6],
+            [-1, -1, -1],
+            [5, 8, 2],
+            [32, -32, 32],
+            [-32, 31, 0],
+        ];
+        for (k, h) in [
+            (key(-3, 2, 7), 0.1f32),
+            (key(0, 0, 0), 0.05),
+            (key(-1000, 999, -5), 0.2),
+        ] {
+            let mut v = Voxel::<4>::new(&k);
+            for q in qs {
+                v.add(q);
+            }
+            let step = h / 64.0;
+            let g = v.gaussian(h, step);
+            assert_eq!(g.count, qs.len() as u32);
+            let (mean, cov) = gaussian_f64(&qs, &k, h as f64, step as f64);
+            assert_gaussian_exact(&g, mean, cov);
         }
-        for &(p, q) in &[(0usize, 1usize), (0, 2), (1, 2)] {
-            let apq = a[(p, q)];
-            if apq == 0.0 {
-                continue;
-            }
-            let theta = (a[(q, q)] - a[(p, p)]) / (2.0 * apq);
-            let sign = if theta >= 0.0 { 1.0 } else { -1.0 };
-            let t = sign / (theta.abs() + libm::sqrtf(theta * theta + 1.0));
-            let c = 1.0 / libm::sqrtf(t * t + 1.0);
-            let s = t * c;
-            // A <- J^T A J with J the rotation in the (p, q) plane.
-            for k in 0..3 {
-                let akp = a[(k, p)];
-                let akq = a[(k, q)];
-                a[(k, p)] = c * akp - s * akq;
-                a[(k, q)] = s * akp + c * akq;
-            }
-            for k in 0..3 {
-                let apk = a[(p, k)];
-                let aqk = a[(q, k)];
-                a[(p, k)] = c * apk - s * aqk;
-                a[(q, k)] = s * apk + c * aqk;
-            }
-            for k in 0..3 {
-                let vkp = v[(k, p)];
-                let vkq = v[(k, q)];
-                v[(k, p)] = c * vkp - s * vkq;
-                v[(k, q)] = s * vkp + c * vkq;
+    }
+
+    #[test]
+    fn voxel_with_fewer_than_two_points_has_zero_covariance() {
+        let k = key(4, -2, 1);
+        let mut v = Voxel::<2>::new(&k);
+        let g0 = v.gaussian(0.1, 0.1 / 64.0);
+        assert_eq!(g0.count, 0);
+        assert_eq!(g0.covariance, Matrix3::zeros());
+        v.add([7, -3, 30]);
+        let g = v.gaussian(0.1, 0.1 / 64.0);
+        assert_eq!(g.count, 1);
+        assert_eq!(g.covariance, Matrix3::zeros());
+        let (mean, _) = gaussian_f64(&[[7, -3, 30]], &k, 0.1f32 as f64, (0.1f32 / 64.0) as f64);
+        for i in 0..3 {
+            assert!(rel_close(
+                g.mean[i] as f64,
+                mean[i],
+                4.0 * f32::EPSILON as f64,
+                0.0
+            ));
+        }
+    }
+
+    #[test]
+    fn sums_cannot_overflow() {
+        let half = 1i64 << (Config::MAX_QUANT_BITS - 1);
+        let n_max = 65535i64; // largest n_max Config::validate accepts
+        let n = n_max + MAX_FRAME_POINTS as i64;
+        // The proof: a voxel starts a frame with n <= n_max and gains at most one frame.
+        assert!(n * half <= i32::MAX as i64);
+        assert!(n * half * half <= i32::MAX as i64);
+        // i64 arithmetic of the covariance numerator n S2 - S1 S1^T cannot overflow either.
+        let (n2, s1max) = (n as i128 * (n * half * half) as i128, (n * half) as i128);
+        assert!(n2 + s1max * s1max < i64::MAX as i128);
+        // The margin is less than one more frame: decay after every frame is essential.
+        assert!((n_max + 2 * MAX_FRAME_POINTS as i64) * half * half > i32::MAX as i64);
+
+        // And the real thing: every S2 entry at its worst-case magnitude, signs mixed.
+        let mut cfg = Config::DEFAULT;
+        cfg.n_max = n_max as u32;
+        assert!(cfg.validate().is_ok());
+        let q = half as i32;
+        let mut v = Voxel::<1>::EMPTY;
+        for _ in 0..n {
+            v.add([q, -q, q]);
+        }
+        let s2 = (n * half * half) as i32;
+        let s1 = (n * half) as i32;
+        assert_eq!(v.n as i64, n);
+        assert_eq!(v.s1, [s1, -s1, s1]);
+        assert_eq!(v.s2, [s2, -s2, s2, s2, -s2, s2]);
+        // The Gaussian of that voxel is finite (all points identical: zero covariance).
+        let g = v.gaussian(0.1, 0.1 / 64.0);
+        assert!(g.covariance.iter().all(|x| *x == 0.0));
+        // Decay brings it back to n_max without overflow.
+        v.decay(n_max as u32);
+        assert!(v.n as i64 <= n_max);
+    }
+
+    #[test]
+    fn decay_halves_until_below_cap() {
+        let mut v = Voxel::<1>::new(&key(0, 0, 0));
+        v.n = 11;
+        v.s1 = [5, -5, 0];
+        v.s2 = [7, -3, 0, 9, 1, 2];
+        v.decay(5);
+        // 11 -> 6 -> 3 (up); sums scale by 3/11, rounded half away from zero.
+        assert_eq!(v.n, 3);
+        assert_eq!(v.s1, [1, -1, 0]); // 5 * 3/11 = 1.36 -> 1
+        assert_eq!(v.s2, [2, -1, 0, 2, 0, 1]); // 1.91, -0.82, 0, 2.45, 0.27, 0.55
+
+        // No change at or below the cap.
+        let mut w = Voxel::<1>::new(&key(0, 0, 0));
+        w.n = 5;
+        w.s1 = [1, 2, 3];
+        w.decay(5);
+        assert_eq!((w.n, w.s1), (5, [1, 2, 3]));
+
+        // n = 1 never reaches 0 (the loop only runs while n > n_max >= 2).
+        let mut u = Voxel::<1>::new(&key(0, 0, 0));
+        u.n = 3;
+        u.decay(2);
+        assert_eq!(u.n, 2);
+    }
+
+    #[test]
+    fn decay_preserves_mean_within_one_quantum() {
+        let mut rng = Lcg(11);
+        for n_max in [64u32, 100, 2048, 65535] {
+            for _ in 0..20 {
+                let mut v = Voxel::<1>::new(&key(0, 0, 0));
+                let n = n_max + 1 + (rng.next() * 3.0 * n_max as f64) as u32;
+                let centre: [f64; 3] = core::array::from_fn(|_| (rng.next() - 0.5) * 60.0);
+                for _ in 0..n {
+                    let q: [i32; 3] = core::array::from_fn(|i| {
+                        (centre[i] + (rng.next() - 0.5) * 4.0)
+                            .round()
+                            .clamp(-32.0, 32.0) as i32
+                    });
+                    v.add(q);
+                }
+                let before: [f64; 3] = core::array::from_fn(|i| v.s1[i] as f64 / v.n as f64);
+                v.decay(n_max);
+                assert!(v.n <= n_max && v.n > n_max / 2, "n {} cap {n_max}", v.n);
+                for i in 0..3 {
+                    let after = v.s1[i] as f64 / v.n as f64;
+                    assert!((after - before[i]).abs() <= 1.0, "{before:?} -> {after}");
+                }
             }
         }
     }
-    ([a[(0, 0)], a[(1, 1)], a[(2, 2)]], v)
+
+    /// Regression: Decay rounds `n` up but halves the sums: for odd `n` the mean shrinks toward the
+    /// voxel centre by a factor n / (n + 1) and variance appears from nothing. With a small
+    /// (valid) `n_max`, three identical points 20 quanta off-centre end up as a Gaussian
+    /// whose mean moved 5 quanta and whose standard deviation is 12 quanta.
+    #[test]
+    fn decay_with_small_n_max_distorts_gaussian() {
+        let mut cfg = Config::with_cell_size(0.125);
+        cfg.n_min = 2;
+        cfg.n_max = 2;
+        let mut map: Map<16, 16, 1> = Map::try_new(cfg).unwrap();
+        // x = centre + 20 quanta + 1/4 quantum: q = 20 for all three points.
+        let x = (32.0 + 20.0 + 0.25) / 512.0;
+        map.integrate(&Isometry3::identity(), &[lp(x, 0.0625, 1.0625, 1); 3])
+            .unwrap();
+        let g = map.gaussian(&key(0, 0, 8)).unwrap();
+        let step = 0.125 / 64.0;
+        let mean_err = (g.mean.x as f64 - (0.0625 + 20.0 * step)).abs();
+        assert!(
+            mean_err <= step && g.covariance[(0, 0)] == 0.0,
+            "mean off by {} quanta, var {} quanta^2",
+            mean_err / step,
+            g.covariance[(0, 0)] as f64 / (step * step)
+        );
+    }
+
+    #[test]
+    fn argmax_ties_go_to_lower_class() {
+        assert_eq!(argmax(&[0, 5, 5, 1]), Some((2, 5.0 / 11.0)));
+        assert_eq!(argmax(&[9, 9]), Some((1, 0.5)));
+        assert_eq!(argmax(&[0, 0, 3]), Some((3, 1.0)));
+        assert_eq!(argmax(&[0, 0, 0]), None);
+    }
 }

@@ -22,10 +22,12 @@ use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
 use defmt_rtt as _;
 #[cfg(not(feature = "rtt"))]
 use defmt_semihosting as _;
+use heapless::Vec;
 use sndt_core::{
-    pose_from_matrix, Config, DepthImage, DepthKind, LabelImage, Map, Matrix3, Point3, Vector3,
+    pose_from_matrix, Config, DepthImage, DepthKind, FrameReport, Isometry3, LabelImage, Map,
+    Matrix3, Point3, RayHit, Vector3,
 };
-use vector::Vector;
+use vector::{Frame, Vector};
 
 const VOXELS: usize = 4096;
 const BLOCKS: usize = 512;
@@ -64,7 +66,7 @@ fn main() -> ! {
             syst.set_reload(0x00ff_ffff);
             syst.clear_current();
             syst.enable_counter();
-            interrupt::free(|cs| run(&mut MAP.borrow(cs).borrow_mut(), &mut syst))
+            interrupt::free(|cs| run(&mut MAP.borrow(cs).borrow_mut(), &mut syst).unwrap_or(false))
         }
         None => false,
     };
@@ -92,17 +94,28 @@ fn ticks_since(syst: &mut SYST, start: u32) -> Option<u32> {
     }
 }
 
-fn run(map: &mut FwMap, syst: &mut SYST) -> bool {
-    let v = match Vector::parse(&VECTOR.0, VOXELS, BLOCKS, CLASSES) {
-        Ok(v) => v,
-        Err(e) => {
-            defmt::error!("test vector: {}", e);
-            return false;
-        }
-    };
+/// The vector is broken (or does not fit the firmware): the run stops at once and fails.
+struct Abort;
+
+/// Integrates the vector, casts its probes and checks the map's CRC: `Ok(true)` when every
+/// check passes.
+fn run(map: &mut FwMap, syst: &mut SYST) -> Result<bool, Abort> {
+    let v = load_vector(map)?;
+    let frames_ok = integrate_frames(map, syst, &v)?;
+    let probes_ok = check_probes(map, &v)?;
+    let map_ok = check_map(map, &v)?;
+    Ok(frames_ok & probes_ok & map_ok)
+}
+
+/// Parses the vector in flash and installs its cell size in the map.
+fn load_vector(map: &mut FwMap) -> Result<Vector<'static>, Abort> {
+    let v = Vector::parse(&VECTOR.0, VOXELS, BLOCKS, CLASSES).map_err(|e| {
+        defmt::error!("test vector: {}", e);
+        Abort
+    })?;
     if map.reset(Config::with_cell_size(v.cell_size)).is_err() {
         defmt::error!("test vector: invalid cell size {=f32}", v.cell_size);
-        return false;
+        return Err(Abort);
     }
     defmt::println!(
         "map: Map<{=usize}, {=usize}, {=usize}> = {=usize} bytes ({=usize} per voxel); vector: {=usize} frames of {=u32}x{=u32}, cell {=f32} m",
@@ -116,22 +129,46 @@ fn run(map: &mut FwMap, syst: &mut SYST) -> bool {
         v.camera.height,
         v.cell_size
     );
+    Ok(v)
+}
+
+/// The camera-to-world pose of a frame, if its rotation is one.
+fn frame_pose(f: &Frame<'_>) -> Option<Isometry3<f32>> {
+    let r = &f.rotation;
+    let rot = Matrix3::new(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8]);
+    let t = Vector3::new(f.translation[0], f.translation[1], f.translation[2]);
+    pose_from_matrix(&rot, &t).ok()
+}
+
+/// How long one call took: SysTick ticks (`None` if the counter wrapped) and DWT cycles.
+struct Timing {
+    ticks: Option<u32>,
+    cycles: u32,
+}
+
+/// Runs `f`, timed by both clocks.
+fn timed<T>(syst: &mut SYST, f: impl FnOnce() -> T) -> (T, Timing) {
+    let _ = syst.has_wrapped(); // clears COUNTFLAG
+    let (start, c0) = (SYST::get_current(), DWT::cycle_count());
+    let result = f();
+    let cycles = DWT::cycle_count().wrapping_sub(c0);
+    let ticks = ticks_since(syst, start);
+    (result, Timing { ticks, cycles })
+}
+
+/// Integrates every frame of the vector, reporting each and the mean times; false when a
+/// frame failed or had points rejected.
+fn integrate_frames(map: &mut FwMap, syst: &mut SYST, v: &Vector<'_>) -> Result<bool, Abort> {
     let mut ok = true;
     let (mut total_ticks, mut total_cycles) = (0u32, 0u32);
     for k in 0..v.frames {
-        let f = match v.frame(k) {
-            Ok(f) => f,
-            Err(e) => {
-                defmt::error!("frame {=usize}: {}", k, e);
-                return false;
-            }
-        };
-        let r = &f.rotation;
-        let rot = Matrix3::new(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8]);
-        let t = Vector3::new(f.translation[0], f.translation[1], f.translation[2]);
-        let Ok(pose) = pose_from_matrix(&rot, &t) else {
+        let f = v.frame(k).map_err(|e| {
+            defmt::error!("frame {=usize}: {}", k, e);
+            Abort
+        })?;
+        let Some(pose) = frame_pose(&f) else {
             defmt::error!("frame {=usize}: invalid pose", k);
-            return false;
+            return Err(Abort);
         };
         let image = DepthImage {
             camera: v.camera,
@@ -140,30 +177,12 @@ fn run(map: &mut FwMap, syst: &mut SYST) -> bool {
             labels: LabelImage::Top1(f.labels),
             stride: 1,
         };
-        let _ = syst.has_wrapped(); // clears COUNTFLAG
-        let (start, c0) = (SYST::get_current(), DWT::cycle_count());
-        let result = map.integrate_depth(&pose, &image);
-        let cycles = DWT::cycle_count().wrapping_sub(c0);
-        let ticks = ticks_since(syst, start);
-        total_cycles = total_cycles.saturating_add(cycles);
+        let (result, time) = timed(syst, || map.integrate_depth(&pose, &image));
+        total_cycles = total_cycles.saturating_add(time.cycles);
         match result {
             Ok(rep) => {
-                defmt::println!(
-                    "frame {=usize}: points {=u32}, end voxels {=u32}, rays {=u32}, voxels +{=u32} -{=u32}, blocks +{=u32} -{=u32}, dropped {=u32}/{=u32}, systick {=u32}, dwt cycles {=u32}",
-                    k,
-                    rep.points_used,
-                    rep.end_voxels,
-                    rep.rays,
-                    rep.voxels_created,
-                    rep.voxels_evicted,
-                    rep.blocks_created,
-                    rep.blocks_evicted,
-                    rep.dropped_points,
-                    rep.dropped_misses,
-                    ticks.unwrap_or(u32::MAX),
-                    cycles
-                );
-                match ticks {
+                report_frame(k, &rep, &time);
+                match time.ticks {
                     Some(t) => total_ticks = total_ticks.saturating_add(t),
                     None => defmt::warn!("frame {=usize}: SysTick wrapped, no timing", k),
                 }
@@ -185,50 +204,101 @@ fn run(map: &mut FwMap, syst: &mut SYST) -> bool {
         total_cycles / frames,
         frames
     );
+    Ok(ok)
+}
 
+/// One line per integrated frame.
+fn report_frame(k: usize, rep: &FrameReport, time: &Timing) {
+    defmt::println!(
+        "frame {=usize}: points {=u32}, end voxels {=u32}, rays {=u32}, voxels +{=u32} -{=u32}, blocks +{=u32} -{=u32}, dropped {=u32}/{=u32}, systick {=u32}, dwt cycles {=u32}",
+        k,
+        rep.points_used,
+        rep.end_voxels,
+        rep.rays,
+        rep.voxels_created,
+        rep.voxels_evicted,
+        rep.blocks_created,
+        rep.blocks_evicted,
+        rep.dropped_points,
+        rep.dropped_misses,
+        time.ticks.unwrap_or(u32::MAX),
+        time.cycles
+    );
+}
+
+/// Most probes the firmware checks (the committed vector has 8).
+const MAX_PROBES: usize = 16;
+
+/// A probe pixel's ray cast into the map, and what the vector's frame saw there.
+struct Probe {
+    frame: usize,
+    col: u32,
+    row: u32,
+    hit: Option<RayHit>,
+    want_t: f32,
+    want_class: u8,
+}
+
+/// Casts the ray of every probe pixel from its frame's pose.
+fn cast_probes(map: &FwMap, v: &Vector<'_>) -> Result<Vec<Probe, MAX_PROBES>, Abort> {
+    let mut probes = Vec::new();
     for i in 0..v.probes {
-        let Some((k, col, row)) = v.probe(i) else {
-            return false;
-        };
+        let (k, col, row) = v.probe(i).ok_or(Abort)?;
         let Ok(f) = v.frame(k) else {
             defmt::error!("probe {=usize}: no frame {=usize}", i, k);
-            return false;
+            return Err(Abort);
         };
-        let r = &f.rotation;
-        let rot = Matrix3::new(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8]);
-        let t = Vector3::new(f.translation[0], f.translation[1], f.translation[2]);
-        let Ok(pose) = pose_from_matrix(&rot, &t) else {
-            return false;
-        };
+        let pose = frame_pose(&f).ok_or(Abort)?;
         let ray = v.camera.ray(col, row);
         let ray = Vector3::new(ray[0], ray[1], ray[2]);
         let px = (row * v.camera.width + col) as usize;
-        let (want_t, want_class) = (f.depth[px] * ray.norm(), f.labels[px]);
         let origin = Point3::from(pose.translation.vector);
-        match map.raycast(&origin, &(pose.rotation * ray), 10.0) {
-            Some(hit) => {
-                let good = (hit.t - want_t).abs() < T_TOL && hit.class == want_class;
-                defmt::println!(
-                    "probe {=usize} (frame {=usize}, pixel {=u32},{=u32}): t {=f32} (expected {=f32}), class {=u8} (expected {=u8}) {=str}",
-                    i,
-                    k,
-                    col,
-                    row,
-                    hit.t,
-                    want_t,
-                    hit.class,
-                    want_class,
-                    if good { "ok" } else { "WRONG" }
-                );
-                ok &= good;
-            }
-            None => {
-                defmt::error!("probe {=usize}: no hit", i);
-                ok = false;
-            }
+        let probe = Probe {
+            frame: k,
+            col,
+            row,
+            hit: map.raycast(&origin, &(pose.rotation * ray), 10.0),
+            want_t: f.depth[px] * ray.norm(),
+            want_class: f.labels[px],
+        };
+        if probes.push(probe).is_err() {
+            defmt::error!("test vector: more than {=usize} probes", MAX_PROBES);
+            return Err(Abort);
         }
     }
+    Ok(probes)
+}
 
+/// Checks that every probe hits the surface its frame saw, within [`T_TOL`] and with its
+/// class.
+fn check_probes(map: &FwMap, v: &Vector<'_>) -> Result<bool, Abort> {
+    let mut ok = true;
+    for (i, p) in cast_probes(map, v)?.iter().enumerate() {
+        let Some(hit) = p.hit else {
+            defmt::error!("probe {=usize}: no hit", i);
+            ok = false;
+            continue;
+        };
+        let good = (hit.t - p.want_t).abs() < T_TOL && hit.class == p.want_class;
+        defmt::println!(
+            "probe {=usize} (frame {=usize}, pixel {=u32},{=u32}): t {=f32} (expected {=f32}), class {=u8} (expected {=u8}) {=str}",
+            i,
+            p.frame,
+            p.col,
+            p.row,
+            hit.t,
+            p.want_t,
+            hit.class,
+            p.want_class,
+            if good { "ok" } else { "WRONG" }
+        );
+        ok &= good;
+    }
+    Ok(ok)
+}
+
+/// Reports the map's totals and checks its snapshot CRC against the host's.
+fn check_map(map: &FwMap, v: &Vector<'_>) -> Result<bool, Abort> {
     let stats = map.stats();
     let (voxels, blocks) = (map.len(), map.block_count());
     defmt::println!(
@@ -242,7 +312,7 @@ fn run(map: &mut FwMap, syst: &mut SYST) -> bool {
     let crc = map.checksum();
     let Some(expected) = vector::parse_crc(EXPECTED_CRC) else {
         defmt::error!("vector/expected_crc.txt is not 0x........");
-        return false;
+        return Err(Abort);
     };
     defmt::println!(
         "snapshot crc {=u32:#010x} (expected {=u32:#010x}) {=str}",
@@ -250,8 +320,7 @@ fn run(map: &mut FwMap, syst: &mut SYST) -> bool {
         expected,
         if crc == expected { "ok" } else { "MISMATCH" }
     );
-    ok &= crc == expected && stats.frames == v.frames as u32;
-    ok
+    Ok(crc == expected && stats.frames == v.frames as u32)
 }
 
 /// Reports static RAM and the peak stack, and checks the stack kept some paint.

@@ -1,0 +1,374 @@
+//! The state of one frame being integrated: the sensor pose in key units, the frame's
+//! stamp, the list of blocks it touches, lookup caches and the [`FrameReport`] it fills.
+//!
+//! Blocks keep per-frame masks (`hit`, `missed`, `far`) that are valid while their stamp
+//! equals the frame's; the first touch of a block in a frame resets them and links the
+//! block into the frame's list, which phases 2 and 3 walk in key order.
+
+use crate::block::Block;
+use crate::camera::validate_pose;
+use crate::error::Error;
+use crate::key::{axis_key, floor_i32, VoxelKey, KEY_LIMIT};
+use crate::map::Map;
+use crate::table::{Entry, NIL};
+use crate::voxel::PointSums;
+use nalgebra::{Isometry3, Matrix3};
+
+/// Most points one frame may hold. With `quant_bits <= 6` and `n_max <= 65535` this bounds a
+/// voxel's count at `65535 + 2^20`, so `|S2| <= 2^10 (65535 + 2^20) < 2^31`: no overflow.
+pub const MAX_FRAME_POINTS: usize = 1 << 20;
+
+/// What one frame did. Every point is accounted for exactly once in `points_used`,
+/// `truncated` or one of the `rejected_*`/`dropped_points` counters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct FrameReport {
+    /// Points folded into voxel statistics.
+    pub points_used: u32,
+    /// Points beyond max range: they only cleared free space up to max range.
+    pub truncated: u32,
+    /// NaN/inf coordinates, or zero/negative/NaN/inf depth.
+    pub rejected_depth: u32,
+    /// A label above the class count, or more than 3 labels.
+    pub rejected_label: u32,
+    /// Points outside the key range.
+    pub rejected_out_of_range: u32,
+    /// Points lost because the map was full and nothing could be evicted.
+    pub dropped_points: u32,
+    /// Free-space updates lost because the map was full and nothing could be evicted.
+    pub dropped_misses: u32,
+    /// Unique end voxels this frame (= hit updates = rays to surfaces).
+    pub end_voxels: u32,
+    /// Rays cast (end voxels + unique truncated ends).
+    pub rays: u32,
+    /// NDT voxels created.
+    pub voxels_created: u32,
+    /// Occupancy blocks created.
+    pub blocks_created: u32,
+    /// NDT voxels evicted to make room.
+    pub voxels_evicted: u32,
+    /// Occupancy blocks evicted to make room.
+    pub blocks_evicted: u32,
+}
+
+/// Per-frame state; lives on the stack during one integration.
+pub(crate) struct FrameState {
+    pub(crate) rot: Matrix3<f32>,
+    pub(crate) origin: [f32; 3],
+    pub(crate) origin_s: [f32; 3],
+    pub(crate) origin_key: VoxelKey,
+    pub(crate) stamp: u16,
+    pub(crate) h: f32,
+    pub(crate) inv_h: f32,
+    /// `2^Q / h`: world metres to quanta.
+    pub(crate) inv_quantum: f32,
+    /// Key range in quanta: `[-32767 * 2^Q, 32768 * 2^Q)`.
+    pub(crate) t_min: f32,
+    pub(crate) t_max: f32,
+    pub(crate) quant_bits: u32,
+    pub(crate) quant_mask: i32,
+    pub(crate) qscale: f32,
+    pub(crate) qhalf: i32,
+    pub(crate) max_range: f32,
+    pub(crate) head: u32,
+    pub(crate) block_cache: (u64, usize),
+    pub(crate) voxel_cache: (u64, usize),
+    /// Points of the current run, and the slot of the voxel they are in.
+    pub(crate) run: PointSums,
+    pub(crate) run_slot: usize,
+    pub(crate) voxels_exhausted: bool,
+    pub(crate) blocks_exhausted: bool,
+    pub(crate) report: FrameReport,
+    pub(crate) evicted_before: (u64, u64),
+}
+
+impl FrameState {
+    /// A sensor-frame point in world coordinates (`f32`, the key convention).
+    #[inline]
+    pub(crate) fn to_world(&self, p: &[f32; 3]) -> [f32; 3] {
+        let m = &self.rot;
+        let mut w = [0.0f32; 3];
+        for (i, wi) in w.iter_mut().enumerate() {
+            *wi = m[(i, 0)] * p[0] + m[(i, 1)] * p[1] + m[(i, 2)] * p[2] + self.origin[i];
+        }
+        w
+    }
+
+    /// The voxel key of a world point and its quantised offset, or `None` outside the key
+    /// range. Works in quanta (`t = w / h * 2^Q`, an exact power-of-two scaling of
+    /// `w / h`): one float-to-int conversion per axis gives both the key
+    /// (`floor(t) >> Q`) and the offset (round half up of `t - 2^Q k - 2^(Q-1)`).
+    #[inline]
+    pub(crate) fn quantise(&self, w: &[f32; 3]) -> Option<(VoxelKey, [i32; 3])> {
+        let mut key_i = [0i32; 3];
+        let mut q = [0i32; 3];
+        for i in 0..3 {
+            let t = w[i] * self.inv_quantum;
+            if !(t >= self.t_min && t < self.t_max) {
+                return None;
+            }
+            let m = floor_i32(t);
+            key_i[i] = m >> self.quant_bits;
+            q[i] = (m & self.quant_mask) - self.qhalf + ((t - m as f32) >= 0.5) as i32;
+        }
+        let key = VoxelKey {
+            x: key_i[0] as i16,
+            y: key_i[1] as i16,
+            z: key_i[2] as i16,
+        };
+        Some((key, q))
+    }
+}
+
+impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
+    /// Starts a frame at `pose` (sensor to world): checks the pose, keys the sensor origin
+    /// and stamps the frame. Nothing in the map changes on an error.
+    pub(crate) fn begin_frame(&mut self, pose: &Isometry3<f32>) -> Result<FrameState, Error> {
+        validate_pose(pose)?;
+        let t = pose.translation.vector;
+        let h = self.config.cell_size;
+        let origin = [t.x, t.y, t.z];
+        let inv_h = 1.0 / h;
+        let origin_s = [t.x * inv_h, t.y * inv_h, t.z * inv_h];
+        let origin_key = origin_key(&origin_s).ok_or(Error::PoseOutOfRange)?;
+        let stamp = self.next_stamp();
+        let qscale = (1u32 << self.config.quant_bits) as f32;
+        Ok(FrameState {
+            rot: *pose.rotation.to_rotation_matrix().matrix(),
+            origin,
+            origin_s,
+            origin_key,
+            stamp,
+            h,
+            inv_h,
+            inv_quantum: inv_h * qscale,
+            t_min: -(KEY_LIMIT as f32) * qscale,
+            t_max: (KEY_LIMIT + 1) as f32 * qscale,
+            quant_bits: self.config.quant_bits as u32,
+            quant_mask: (1 << self.config.quant_bits) - 1,
+            qscale,
+            qhalf: 1 << (self.config.quant_bits - 1),
+            max_range: self.config.max_range,
+            head: NIL,
+            block_cache: (0, 0),
+            voxel_cache: (0, 0),
+            run: PointSums::EMPTY,
+            run_slot: usize::MAX,
+            voxels_exhausted: false,
+            blocks_exhausted: false,
+            report: FrameReport::default(),
+            evicted_before: (self.stats.voxels_evicted, self.stats.blocks_evicted),
+        })
+    }
+
+    /// The stamp of the next frame. Stamps run 1..=65535; whenever they start over (also
+    /// when the u32 frame count wraps, or after loading a snapshot), all old stamps are
+    /// forgotten, so no block's masks can look current by accident.
+    fn next_stamp(&mut self) -> u16 {
+        let stamp = (self.stats.frames % 65535) as u16 + 1;
+        if stamp == 1 {
+            for b in self.blocks.slots.iter_mut() {
+                b.stamp = 0;
+            }
+        }
+        stamp
+    }
+
+    /// The block with packed key `packed`, created if missing, with per-frame masks
+    /// current. `link` puts a newly touched block on the frame's list (phase 1).
+    pub(crate) fn frame_block(
+        &mut self,
+        f: &mut FrameState,
+        packed: u64,
+        link: bool,
+    ) -> Option<usize> {
+        if f.block_cache.0 == packed {
+            return Some(f.block_cache.1);
+        }
+        let bs = match self.blocks.find(packed) {
+            Some(bs) => bs,
+            None => {
+                if self.blocks.is_full() && !f.blocks_exhausted {
+                    f.blocks_exhausted = self.evict_blocks(&f.origin_key, f.stamp) == 0;
+                    f.voxel_cache = (0, 0);
+                }
+                let bs = self.blocks.insert(Block::new(packed)).ok()?;
+                f.report.blocks_created += 1;
+                bs
+            }
+        };
+        let b = &mut self.blocks.slots[bs];
+        if b.touch(f.stamp) && link {
+            b.frame_next = f.head;
+            f.head = bs as u32 + 1;
+        }
+        f.block_cache = (packed, bs);
+        Some(bs)
+    }
+
+    /// Bottom-up merge sort of the frame's block list by packed key (no allocation).
+    pub(crate) fn sort_frame_list(&mut self, head: u32) -> u32 {
+        let key = |m: &Self, i: u32| m.blocks.slots[(i - 1) as usize].packed_key();
+        let next = |m: &Self, i: u32| m.blocks.slots[(i - 1) as usize].frame_next;
+        let mut list = head;
+        let mut insize = 1usize;
+        loop {
+            let mut p = list;
+            list = NIL;
+            let mut tail = NIL;
+            let mut merges = 0;
+            while p != NIL {
+                merges += 1;
+                let mut q = p;
+                let mut psize = 0;
+                for _ in 0..insize {
+                    psize += 1;
+                    q = next(self, q);
+                    if q == NIL {
+                        break;
+                    }
+                }
+                let mut qsize = insize;
+                while psize > 0 || (qsize > 0 && q != NIL) {
+                    let e;
+                    if psize == 0 {
+                        e = q;
+                        q = next(self, q);
+                        qsize -= 1;
+                    } else if qsize == 0 || q == NIL || key(self, p) <= key(self, q) {
+                        e = p;
+                        p = next(self, p);
+                        psize -= 1;
+                    } else {
+                        e = q;
+                        q = next(self, q);
+                        qsize -= 1;
+                    }
+                    if tail == NIL {
+                        list = e;
+                    } else {
+                        self.blocks.slots[(tail - 1) as usize].frame_next = e;
+                    }
+                    tail = e;
+                }
+                p = q;
+            }
+            if tail != NIL {
+                self.blocks.slots[(tail - 1) as usize].frame_next = NIL;
+            }
+            if merges <= 1 {
+                return list;
+            }
+            insize *= 2;
+        }
+    }
+
+    /// Ends the frame: counts it and its losses in the map's totals, and completes its
+    /// report with the evictions it caused.
+    pub(crate) fn close_frame(&mut self, mut f: FrameState) -> FrameReport {
+        self.stats.frames = self.stats.frames.wrapping_add(1);
+        self.stats.dropped_points += f.report.dropped_points as u64;
+        self.stats.dropped_misses += f.report.dropped_misses as u64;
+        f.report.voxels_evicted = (self.stats.voxels_evicted - f.evicted_before.0) as u32;
+        f.report.blocks_evicted = (self.stats.blocks_evicted - f.evicted_before.1) as u32;
+        f.report
+    }
+}
+
+/// The key of the sensor's voxel from its position in voxel units, or `None` outside the
+/// key range.
+fn origin_key(s: &[f32; 3]) -> Option<VoxelKey> {
+    let ok = |s: f32| axis_key(s).map(|k| k as i32);
+    match (ok(s[0]), ok(s[1]), ok(s[2])) {
+        (Some(x), Some(y), Some(z)) => VoxelKey::from_ints(x, y, z),
+        _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use crate::testutil::*;
+    use crate::*;
+
+    #[test]
+    fn quantised_offsets_reach_but_never_exceed_half_range() {
+        // A point on a voxel's lower corner quantises to -2^(Q-1) on every axis, the largest
+        // f32 below the upper corner to +2^(Q-1), for every allowed Q.
+        for qb in 1..=Config::MAX_QUANT_BITS {
+            let mut cfg = Config::with_cell_size(0.125);
+            cfg.quant_bits = qb;
+            let mut map: Map<16, 16, 1> = Map::try_new(cfg).unwrap();
+            let lo = 1.0f32; // voxel 8
+            let hi = f32::from_bits(1.125f32.to_bits() - 1); // still voxel 8
+            let pts = [lp(lo, lo, lo, 1), lp(hi, hi, hi, 1)];
+            map.integrate(&Isometry3::identity(), &pts).unwrap();
+            let half = 1i32 << (qb - 1);
+            let v = voxel(&map, &key(8, 8, 8));
+            assert_eq!(v.n, 2);
+            assert_eq!(v.s1, [0, 0, 0], "Q={qb}");
+            assert_eq!(v.s2, [2 * half * half; 6], "Q={qb}");
+            let mut map2: Map<16, 16, 1> = Map::try_new(cfg).unwrap();
+            map2.integrate(&Isometry3::identity(), &pts[..1]).unwrap();
+            assert_eq!(voxel(&map2, &key(8, 8, 8)).s1, [-half; 3], "Q={qb}");
+        }
+    }
+
+    /// Regression: Frame stamps are `frames % 65535 + 1`, and old stamps are only forgotten when the
+    /// stamp is 1 and `frames > 0`. When `frames` wraps from u32::MAX to 0 (a snapshot may
+    /// carry any frame count), two consecutive frames both get stamp 1 without a reset:
+    /// the second frame's blocks look already touched, are never put on the frame list,
+    /// and their voxels get no decay, no hit and no rays. `n` then exceeds `n_max` (with
+    /// n_max = 65535 and full frames, S2 overflows i32 in the next frame), and the map
+    /// writes a snapshot it cannot read back.
+    #[test]
+    fn frame_counter_wrap_skips_decay_and_hits() {
+        let mut cfg = Config::DEFAULT;
+        cfg.n_min = 2;
+        cfg.n_max = 2;
+        let mut map: Map<16, 64, 1> = Map::try_new(cfg).unwrap();
+        let mut s = snapshot(&map);
+        s[76..80].copy_from_slice(&u32::MAX.to_le_bytes());
+        fix_crc(&mut s);
+        map.read_snapshot(&s).unwrap();
+        assert_eq!(map.stats().frames, u32::MAX);
+        let p = lp(0.05, 0.05, 1.05, 1);
+        let k = key(0, 0, 10);
+        let r1 = map.integrate(&Isometry3::identity(), &[p]).unwrap();
+        assert_eq!(r1.end_voxels, 1);
+        let r2 = map.integrate(&Isometry3::identity(), &[p; 3]).unwrap();
+        let n = map.gaussian(&k).unwrap().count;
+        let ok_decay = n <= 2;
+        let ok_hit = r2.end_voxels == 1 && map.log_odds(&k) == 2.0 * 870.0 / 1024.0;
+        let mut copy: Map<16, 64, 1> = Map::new(Config::DEFAULT);
+        let ok_snapshot = copy.read_snapshot(&snapshot(&map)).is_ok();
+        assert!(
+            ok_decay && ok_hit && ok_snapshot,
+            "n = {n} (n_max 2), end_voxels {}, log-odds {}, snapshot readable {ok_snapshot}",
+            r2.end_voxels,
+            map.log_odds(&k)
+        );
+    }
+
+    /// Regression: The consequence of the stamp wrap-around at the documented bounds: with
+    /// `n_max = 65535`, three full frames of worst-case points (|q| = 32 on every axis) into
+    /// one voxel, the middle one without decay, give `S2 = 2.13e6 * 1024 > i32::MAX`:
+    /// overflow (debug panic; release wraps S2 negative).
+    #[test]
+    fn frame_counter_wrap_overflows_sums() {
+        let mut cfg = Config::with_cell_size(0.125);
+        cfg.n_max = 65535;
+        let mut map: std::boxed::Box<Map<16, 64, 1>> =
+            std::boxed::Box::new(Map::try_new(cfg).unwrap());
+        map.stats.frames = u32::MAX; // what a snapshot may carry (see the test above)
+                                     // The lower corner of voxel (8, 8, 8): q = -32 on every axis.
+        let pts = std::vec![lp(1.0, 1.0, 1.0, 1); MAX_FRAME_POINTS];
+        for _ in 0..3 {
+            map.integrate(&Isometry3::identity(), &pts).unwrap();
+        }
+        let v = voxel(&*map, &key(8, 8, 8));
+        assert!(v.n <= 65535 && v.s2[0] > 0, "n {} s2 {:?}", v.n, v.s2);
+    }
+}

@@ -1,0 +1,440 @@
+//! Phase 3 of a frame: free space along the rays.
+//!
+//! One ray per unique end voxel, to the mean of its points with the end voxel excluded
+//! (it got its hit in phase 2), and one per unique truncated end, end included; the rays
+//! go in the order of the sorted frame list, so the result does not depend on point
+//! order. Every voxel a ray traverses (exact 3-D DDA) gets at most one miss per frame. With
+//! [`MissModel::NdtOm`] a voxel with a valid Gaussian gets a miss weighted by how close the
+//! ray passes to the Gaussian, and none when the ray ends before its closest approach, so
+//! grazing rays do not erase thin surfaces.
+
+use crate::block::bits;
+use crate::config::{to_fixed, Config, MissModel};
+use crate::dda::Dda;
+use crate::frame::FrameState;
+use crate::gaussian::{PrepCache, Prepared};
+use crate::key::VoxelKey;
+use crate::map::Map;
+use crate::table::{Entry, NIL};
+use crate::voxel::Voxel;
+use nalgebra::Vector3;
+
+/// Prepared-Gaussian cache of phase 3 (voxel statistics no longer change then).
+type GaussCache = PrepCache<32>;
+
+/// A free-space ray in world metres.
+struct Ray {
+    origin: [f32; 3],
+    dir: [f32; 3],
+    len: f32,
+    /// True when the ray ends at a measured point (false for max-range truncation).
+    measured: bool,
+}
+
+impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
+    /// Casts the frame's rays, block by block along the sorted frame list starting at
+    /// `head`: to every hit voxel, then to every truncated end that got no points.
+    pub(crate) fn clear_free_space(&mut self, f: &mut FrameState, head: u32) {
+        let mut cache = GaussCache::new();
+        let mut i = head;
+        while i != NIL {
+            let bs = (i - 1) as usize;
+            let b = self.blocks.slots[bs];
+            for cell in bits(b.hit) {
+                let key = VoxelKey::from_block_cell(b.packed_key(), cell);
+                let target = match self.voxels.find(key.packed()) {
+                    Some(vs) => mean_in_voxel(&self.voxels.slots[vs], &key, f.qscale),
+                    None => centre(&key),
+                };
+                self.cast(f, &mut cache, target, &key, false);
+            }
+            for cell in bits(b.far & !b.hit) {
+                let key = VoxelKey::from_block_cell(b.packed_key(), cell);
+                self.cast(f, &mut cache, centre(&key), &key, true);
+            }
+            i = b.frame_next;
+        }
+    }
+
+    /// Exact voxel traversal (Amanatides & Woo) from the sensor to `target` (in voxel
+    /// units), giving each traversed voxel its miss; `end` itself only if `include_end`.
+    fn cast(
+        &mut self,
+        f: &mut FrameState,
+        cache: &mut GaussCache,
+        target: [f32; 3],
+        end: &VoxelKey,
+        include_end: bool,
+    ) {
+        f.report.rays += 1;
+        let o = f.origin_s;
+        let d = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
+        let len_s = libm::sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        let ray = Ray {
+            origin: f.origin,
+            dir: if len_s > 0.0 {
+                [d[0] / len_s, d[1] / len_s, d[2] / len_s]
+            } else {
+                [0.0, 0.0, 1.0]
+            },
+            len: len_s * f.h,
+            measured: !include_end,
+        };
+        let start = [
+            f.origin_key.x as i32,
+            f.origin_key.y as i32,
+            f.origin_key.z as i32,
+        ];
+        let e = [end.x as i32, end.y as i32, end.z as i32];
+        traverse(o, target, start, e, include_end, |k| {
+            self.miss(f, cache, &ray, &k)
+        });
+    }
+
+    /// The miss of the voxel with key components `k` for `ray`, once per frame.
+    fn miss(&mut self, f: &mut FrameState, cache: &mut GaussCache, ray: &Ray, k: &[i32; 3]) {
+        let Some(key) = VoxelKey::from_ints(k[0], k[1], k[2]) else {
+            return;
+        };
+        let Some(bs) = self.frame_block(f, key.block(), false) else {
+            f.report.dropped_misses = f.report.dropped_misses.saturating_add(1);
+            return;
+        };
+        let cell = key.cell();
+        let bit = 1u64 << cell;
+        let b = &self.blocks.slots[bs];
+        if b.missed & bit != 0 {
+            return;
+        }
+        let cfg = &self.config;
+        let mut delta = to_fixed(cfg.miss);
+        if b.surface & bit != 0 && cfg.miss_model == MissModel::NdtOm {
+            if let Some(vs) = self.voxels.find(key.packed()) {
+                let v = &self.voxels.slots[vs];
+                if v.n >= cfg.n_min {
+                    let g = cache.get(vs, || v.prepared(cfg));
+                    match ndt_om_miss(cfg, ray, &g) {
+                        Some(l) => delta = to_fixed(l),
+                        None => return,
+                    }
+                }
+            }
+        }
+        let (lo, hi) = (to_fixed(cfg.clamp_min), to_fixed(cfg.clamp_max));
+        let b = &mut self.blocks.slots[bs];
+        b.missed |= bit;
+        b.add_logodds(cell, delta, lo, hi);
+    }
+}
+
+/// Exact voxel traversal (Amanatides & Woo) of the segment from `o` to `target` (voxel
+/// units) starting in voxel `start` and ending in `end`, visiting `end` only if
+/// `include_end`. Axis ties step the lowest axis first; at most the Manhattan distance
+/// between the keys plus one voxels are visited.
+fn traverse(
+    o: [f32; 3],
+    target: [f32; 3],
+    start: [i32; 3],
+    end: [i32; 3],
+    include_end: bool,
+    mut visit: impl FnMut([i32; 3]),
+) {
+    let d = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
+    let mut dda = Dda::new(o, d, start);
+    let steps: u32 = (0..3).map(|a| (end[a] - start[a]).unsigned_abs()).sum();
+    for _ in 0..=steps {
+        if dda.k == end {
+            if include_end {
+                visit(end);
+            }
+            return;
+        }
+        visit(dda.k);
+        let (a, t) = dda.next_axis();
+        if t > 1.0 + 1e-4 {
+            return;
+        }
+        dda.advance(a);
+    }
+}
+
+/// Visits every voxel the segment from `from` to `to` (metres) passes through, in order,
+/// both end voxels included: the same traversal the map uses for free space. Returns
+/// `false` (visiting nothing) when an end is outside the key range.
+///
+/// ```
+/// use sndt_core::{voxels_on_segment, VoxelKey};
+/// let mut seen = Vec::new();
+/// assert!(voxels_on_segment(&[0.05, 0.05, 0.05], &[0.35, 0.15, 0.05], 0.1, |k| seen.push(k)));
+/// assert_eq!(seen.first(), Some(&VoxelKey { x: 0, y: 0, z: 0 }));
+/// assert_eq!(seen.last(), Some(&VoxelKey { x: 3, y: 1, z: 0 }));
+/// assert_eq!(seen.len(), 5);
+/// ```
+pub fn voxels_on_segment(
+    from: &[f32; 3],
+    to: &[f32; 3],
+    cell_size: f32,
+    mut visit: impl FnMut(VoxelKey),
+) -> bool {
+    let (Some(a), Some(b)) = (
+        VoxelKey::from_point(from, cell_size),
+        VoxelKey::from_point(to, cell_size),
+    ) else {
+        return false;
+    };
+    let o = [
+        from[0] / cell_size,
+        from[1] / cell_size,
+        from[2] / cell_size,
+    ];
+    let t = [to[0] / cell_size, to[1] / cell_size, to[2] / cell_size];
+    let ka = [a.x as i32, a.y as i32, a.z as i32];
+    let kb = [b.x as i32, b.y as i32, b.z as i32];
+    traverse(o, t, ka, kb, true, |k| {
+        if let Some(key) = VoxelKey::from_ints(k[0], k[1], k[2]) {
+            visit(key);
+        }
+    });
+    true
+}
+
+/// NDT-OM miss log-odds for a ray through a voxel's Gaussian, or `None` when the point of
+/// the ray closest to the Gaussian lies beyond the ray's end.
+fn ndt_om_miss(cfg: &Config, ray: &Ray, g: &Prepared) -> Option<f32> {
+    let u = Vector3::new(ray.dir[0], ray.dir[1], ray.dir[2]);
+    let s = Vector3::new(ray.origin[0], ray.origin[1], ray.origin[2]);
+    let w = g.inv * u;
+    let a = u.dot(&w);
+    if a.is_nan() || a <= 0.0 {
+        return Some(cfg.miss);
+    }
+    let t = w.dot(&(g.mean - s)) / a;
+    if t > ray.len {
+        return None;
+    }
+    let x = s + u * t;
+    let dx = x - g.mean;
+    let p_n = libm::expf(-0.5 * dx.dot(&(g.inv * dx)));
+    let p_z = if ray.measured {
+        let sigma = cfg.noise_base + cfg.noise_quadratic * ray.len * ray.len;
+        let dz = ray.len - t;
+        libm::expf(-0.5 * dz * dz / (sigma * sigma))
+    } else {
+        0.0
+    };
+    let p = 0.5 - cfg.lambda * p_n * (1.0 - p_z);
+    Some(libm::logf(p / (1.0 - p)))
+}
+
+/// Centre of a voxel in voxel units.
+fn centre(key: &VoxelKey) -> [f32; 3] {
+    [key.x as f32 + 0.5, key.y as f32 + 0.5, key.z as f32 + 0.5]
+}
+
+/// Mean of a voxel's points in voxel units, kept strictly inside the voxel.
+fn mean_in_voxel<const C: usize>(v: &Voxel<C>, key: &VoxelKey, qscale: f32) -> [f32; 3] {
+    let n = v.n.max(1) as f32;
+    let k = [key.x as f32, key.y as f32, key.z as f32];
+    let mut m = [0.0; 3];
+    for i in 0..3 {
+        let off = 0.5 + v.s1[i] as f32 / n / qscale;
+        m[i] = k[i] + off.clamp(0.01, 0.99);
+    }
+    m
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use crate::testutil::*;
+    use crate::*;
+    use std::vec::Vec;
+
+    /// The NDT-OM miss for an isotropic Gaussian (variance `var`, m^2) in f64, exactly as the
+    /// design states it; `None` when the closest point lies beyond the ray's end.
+    fn ndt_om_f64(
+        cfg: &Config,
+        s: [f64; 3],
+        end: [f64; 3],
+        measured: bool,
+        mu: [f64; 3],
+        var: f64,
+    ) -> Option<f64> {
+        let d: [f64; 3] = core::array::from_fn(|i| end[i] - s[i]);
+        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let u: [f64; 3] = core::array::from_fn(|i| d[i] / len);
+        let t: f64 = (0..3).map(|i| u[i] * (mu[i] - s[i])).sum();
+        if t > len {
+            return None;
+        }
+        let dist2: f64 = (0..3).map(|i| (s[i] + t * u[i] - mu[i]).powi(2)).sum();
+        let p_n = (-0.5 * dist2 / var).exp();
+        let p_z = if measured {
+            let sigma = cfg.noise_base as f64 + cfg.noise_quadratic as f64 * len * len;
+            (-0.5 * (len - t).powi(2) / (sigma * sigma)).exp()
+        } else {
+            0.0
+        };
+        let p = 0.5 - cfg.lambda as f64 * p_n * (1.0 - p_z);
+        Some((p / (1.0 - p)).ln())
+    }
+
+    /// Six points at +-16 quanta on each axis around the centre of voxel `k` (h = 1/8):
+    /// mean = centre, isotropic variance 6 * 512 / 30 quanta^2.
+    fn isotropic_points(k: &VoxelKey, origin: [f32; 3]) -> Vec<LabeledPoint> {
+        let c = k.center(0.125);
+        let a = 16.0 / 512.0;
+        let mut v = Vec::new();
+        for axis in 0..3 {
+            for sign in [-1.0f32, 1.0] {
+                let mut p = c;
+                p[axis] += sign * a;
+                v.push(lp(p[0] - origin[0], p[1] - origin[1], p[2] - origin[2], 1));
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn ndt_om_miss_hand_computed() {
+        let h = 0.125f32;
+        let cfg = Config::with_cell_size(h);
+        let mut map: Map<64, 64, 2> = Map::try_new(cfg).unwrap();
+        let o = [0.0625f32, 0.0625, 0.0];
+        let pose = at(o[0], o[1], o[2]);
+        let v = key(0, 0, 8);
+        map.integrate(&pose, &isotropic_points(&v, o)).unwrap();
+        assert_eq!(fixed(&map, &v), 870);
+        let var = 102.4 / (512.0 * 512.0);
+        let g = map.gaussian(&v).unwrap();
+        assert!(rel_close(g.covariance[(0, 0)] as f64, var, 1e-6, 0.0));
+        assert!(rel_close(g.covariance[(2, 2)] as f64, var, 1e-6, 0.0));
+
+        // Measured ray to a point in voxel (0, 0, 16), 20 quanta off-centre in x: it passes
+        // the Gaussian of (0, 0, 8) about 2 cm away.
+        let end = [0.0625f32 + 20.0 / 512.0, 0.0625, 2.0625];
+        map.integrate(&pose, &[lp(end[0] - o[0], end[1] - o[1], end[2] - o[2], 1)])
+            .unwrap();
+        let mu = [0.0625, 0.0625, 1.0625];
+        let l = ndt_om_f64(
+            &cfg,
+            [0.0625, 0.0625, 0.0],
+            end.map(|x| x as f64),
+            true,
+            mu,
+            var,
+        )
+        .unwrap();
+        // The hand computation: 2.01 cm from a 1.98 cm Gaussian, p_z ~ 0.
+        assert!((l - (-0.23944)).abs() < 2e-4, "l = {l}");
+        let want = 870 + libm::round(l * 1024.0) as i32;
+        let got = fixed(&map, &v);
+        assert!((got - want).abs() <= 1, "got {got}, want {want}");
+        // A voxel without a Gaussian on the same ray gets the constant miss on top of the
+        // first frame's constant miss.
+        assert_eq!(fixed(&map, &key(0, 0, 4)), -820);
+
+        // Truncated ray (p_z = 0): a point 40 m away clears free space to max range along a
+        // ray from a sensor 3 quanta off the Gaussian's axis.
+        let mut map: Map<64, 512, 2> = Map::try_new(cfg).unwrap();
+        map.integrate(&pose, &isotropic_points(&v, o)).unwrap();
+        let o2 = [0.0625f32 + 3.0 / 512.0, 0.0625, 0.0];
+        let r = map
+            .integrate(&at(o2[0], o2[1], o2[2]), &[lp(0.0, 0.0, 40.0, 1)])
+            .unwrap();
+        assert_eq!((r.truncated, r.rays), (1, 1));
+        // The ray ends at the centre of the truncated end voxel (0, 0, 160).
+        let far = key(0, 0, 160).center(h).map(|x| x as f64);
+        let l = ndt_om_f64(&cfg, o2.map(|x| x as f64), far, false, mu, var).unwrap();
+        let want = 870 + libm::round(l * 1024.0) as i32;
+        let got = fixed(&map, &v);
+        assert!((got - want).abs() <= 1, "got {got}, want {want} (l = {l})");
+        assert!(
+            want < 870 - 300,
+            "a near-central ray must clear strongly: {want}"
+        );
+    }
+
+    #[test]
+    fn ndt_om_skips_gaussian_beyond_ray_end() {
+        // Voxel (0, 0, 15) holds a Gaussian stretched along (1, 0, 1) whose Mahalanobis-closest
+        // point to a vertical ray lies at z ~ 2.0155, beyond the ray's end (z ~ 2.00125 in voxel
+        // (0, 0, 16)). The ray traverses the voxel, but NDT-OM leaves it alone; a constant
+        // miss model does not.
+        let h = 0.125f32;
+        let run = |model: MissModel| {
+            let mut cfg = Config::with_cell_size(h);
+            cfg.miss_model = model;
+            let mut map: Map<64, 64, 2> = Map::try_new(cfg).unwrap();
+            let q = |v: i32| v as f32 / 512.0;
+            // Points x = 0, 8, 16 quanta, z = centre - 8, centre, centre + 8 quanta.
+            let zc = 15.0 * 0.125 + 0.0625;
+            let pts = [
+                lp(q(0), 0.0625, zc - q(8), 1),
+                lp(q(8), 0.0625, zc, 1),
+                lp(q(16), 0.0625, zc + q(8), 1),
+            ];
+            let sensor = at(0.09375, 0.0625, 0.0);
+            let rel: Vec<_> = pts
+                .iter()
+                .map(|p| {
+                    lp(
+                        p.position.x - 0.09375,
+                        p.position.y - 0.0625,
+                        p.position.z,
+                        1,
+                    )
+                })
+                .collect();
+            map.integrate(&sensor, &rel).unwrap();
+            let v = key(0, 0, 15);
+            assert_eq!(map.gaussian(&v).unwrap().count, 3);
+            let before = fixed(&map, &v);
+            // End point on the lower face of voxel (0, 0, 16), straight above the sensor.
+            let r = map.integrate(&sensor, &[lp(0.0, 0.0, 2.0, 1)]).unwrap();
+            assert_eq!(r.rays, 1);
+            (before, fixed(&map, &v), fixed(&map, &key(0, 0, 14)))
+        };
+        let (before, after, below) = run(MissModel::NdtOm);
+        assert_eq!(before, 870);
+        assert_eq!(
+            after, 870,
+            "Gaussian beyond the ray end must not be cleared"
+        );
+        assert_eq!(below, -820); // an ordinary voxel on the same ray was cleared twice
+        let (before, after, _) = run(MissModel::Constant);
+        assert_eq!((before, after), (870, 870 - 410));
+    }
+
+    /// Regression: `lambda = 0.5` is valid. A truncated ray (p_z = 0) through a Gaussian's mean gives
+    /// p_N = 1, p = 0.5 - 0.5 = 0, logit = -inf, `to_fixed` = i32::MIN, and the second such
+    /// miss computes `-2048 + i32::MIN`: overflow (debug panic); in release the sum wraps
+    /// and clamps to `clamp_max`, turning a cleared voxel into a fully occupied one.
+    #[test]
+    fn ndt_om_lambda_half_overflows_log_odds() {
+        // lambda = 0.5 allowed p = 0 (logit -inf); now lambda <= 0.49, so p >= 0.01.
+        let mut cfg = Config::with_cell_size(0.125);
+        cfg.lambda = 0.5;
+        assert_eq!(cfg.validate(), Err(Error::InvalidConfig));
+        cfg.lambda = 0.49;
+        assert!(cfg.validate().is_ok());
+        let mut map: Map<16, 256, 1> = Map::try_new(cfg).unwrap();
+        let pose = at(0.0625, 0.0625, 0.0);
+        // Three points on the z axis of voxel (0, 0, 8): mean exactly on the ray.
+        let pts = [
+            lp(0.0, 0.0, 1.03125, 1),
+            lp(0.0, 0.0, 1.0625, 1),
+            lp(0.0, 0.0, 1.09375, 1),
+        ];
+        map.integrate(&pose, &pts).unwrap();
+        let v = key(0, 0, 8);
+        assert_eq!(map.log_odds(&v), 870.0 / 1024.0);
+        let far = [lp(0.0, 0.0, 40.0, 1)];
+        map.integrate(&pose, &far).unwrap();
+        assert_eq!(map.log_odds(&v), -2.0);
+        map.integrate(&pose, &far).unwrap();
+        assert_eq!(map.log_odds(&v), -2.0);
+    }
+}
