@@ -525,7 +525,7 @@ fn cloud_writes_the_frames_world_points() {
         split: Some("val".into()),
         ..OpenOptions::default()
     };
-    let s = ply::cloud_command(&root, "s/c/0003", &out, &options).unwrap();
+    let s = sndt_host::cli::cloud::cloud(&root, "s/c/0003", &out, &options).unwrap();
     assert_eq!(s.points, 3);
     assert_eq!(s.bounds, Some(([-1.0, -2.0, 1.0], [2.0, 0.5, 4.0])));
     assert!(s.to_string().contains("3 points"), "{s}");
@@ -549,7 +549,7 @@ fn cloud_writes_the_frames_world_points() {
     assert_eq!(pts[0], ([9.0, -1.0, 2.0], [128, 128, 128]));
 
     // an unknown frame is an error naming it
-    let e = chain(ply::cloud_command(&root, "s/c/0004", &out, &options).unwrap_err());
+    let e = chain(sndt_host::cli::cloud::cloud(&root, "s/c/0004", &out, &options).unwrap_err());
     assert!(e.contains("s/c/0004"), "{e}");
     std::fs::remove_dir_all(&root).unwrap();
 }

@@ -7,6 +7,7 @@ use crate::dataset::frame::{FrameId, LabelSource};
 use crate::dataset::source::{Dataset, Every};
 use crate::dataset::synthetic::{SynthOptions, Synthetic};
 use crate::eval::evaluate::{evaluate, EvalOptions, Evaluation, PAPER_ESANET_MIOU, PAPER_SNDT};
+use crate::eval::metrics::Metrics;
 use crate::output::progress::progress;
 use crate::output::{chart, picture};
 use anyhow::{Context, Result};
@@ -14,24 +15,30 @@ use sndt_core::{Config, MissModel};
 use std::path::PathBuf;
 use std::time::Instant;
 
-/// What the demo does.
-#[derive(Clone, Debug)]
-pub struct DemoOptions {
+/// Arguments of `sndt demo`.
+#[derive(clap::Args, Clone, Debug, PartialEq)]
+pub struct DemoArgs {
     /// Output directory for pictures, back-projections and metrics.
+    #[arg(long, default_value = "out/demo")]
     pub out: PathBuf,
     /// Voxel edge in metres.
+    #[arg(long, default_value_t = 0.10)]
     pub cell: f32,
-    /// Synthetic scenes (kinds cycle: living, bedroom, kitchen, ...).
+    /// Synthetic scenes (kinds cycle: living, bedroom, kitchen, office, bathroom, open plan).
+    #[arg(long, default_value_t = 2)]
     pub scenes: usize,
-    /// Frames per trajectory (of a 100-frame walk, evenly spaced).
+    /// Frames per trajectory.
+    #[arg(long, default_value_t = 20)]
     pub frames: usize,
-    /// Constant misses instead of NDT-OM misses.
+    /// Use constant misses instead of NDT-OM misses.
+    #[arg(long)]
     pub constant_miss: bool,
 }
 
-impl Default for DemoOptions {
+impl Default for DemoArgs {
+    /// The command line's defaults (`sndt demo` without options).
     fn default() -> Self {
-        DemoOptions {
+        DemoArgs {
             out: PathBuf::from("out/demo"),
             cell: 0.10,
             scenes: 2,
@@ -41,76 +48,123 @@ impl Default for DemoOptions {
     }
 }
 
+/// The two evaluations of the demo: the map fed ground-truth labels, and fed predictions.
+struct Runs {
+    gt: Evaluation,
+    pred: Evaluation,
+}
+
 /// Runs the demo and prints its report.
-pub fn run(o: &DemoOptions) -> Result<()> {
+pub fn run(a: &DemoArgs) -> Result<()> {
     let start = Instant::now();
-    // Hypersim-like 100-frame walks, of which every k-th frame is used: the maps cover
-    // the whole walk at a fraction of the cost.
-    let walk = o.frames.max(100);
-    let step = (walk / o.frames.max(1)).max(1) as u32;
-    let split = Every::new(
-        Box::new(Synthetic::new(SynthOptions {
-            scenes: o.scenes,
-            frames: walk,
-            ..SynthOptions::default()
-        })?),
-        step,
-    );
-    let mut config = Config::with_cell_size(o.cell);
-    if o.constant_miss {
-        config.miss_model = MissModel::Constant;
-    }
+    let split = walk_split(a)?;
+    let config = map_config(a);
     println!(
         "sndt demo: {}, cell {:.0} cm, {} miss",
         split.describe(),
-        o.cell * 100.0,
-        if o.constant_miss {
+        a.cell * 100.0,
+        if a.constant_miss {
             "constant"
         } else {
             "NDT-OM"
         }
     );
-    std::fs::create_dir_all(&o.out).with_context(|| format!("creating {}", o.out.display()))?;
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let keep = frames_to_draw(&split);
+    let runs = Runs {
+        gt: evaluate_with(&split, config, LabelSource::Gt, &keep, a)?,
+        pred: evaluate_with(&split, config, LabelSource::Pred, &keep, a)?,
+    };
+    print_paper_comparison(a.cell, &runs);
+    println!();
+    write_frame_pictures(&split, &keep, &runs, a)?;
+    write_birdseye_views(&runs.gt, a)?;
+    write_iou_chart_and_metrics(&runs, a)?;
+    println!();
+    print_per_class_iou(&runs);
+    println!("\ndone in {:.0} s", start.elapsed().as_secs_f64());
+    Ok(())
+}
 
-    // A few frames to draw: the middle of each trajectory, and a third of the way in.
+/// Hypersim-like 100-frame walks, of which every k-th frame is used: the maps cover the
+/// whole walk at a fraction of the cost.
+fn walk_split(a: &DemoArgs) -> Result<Every> {
+    let walk = a.frames.max(100);
+    let step = (walk / a.frames.max(1)).max(1) as u32;
+    let scenes = Synthetic::new(SynthOptions {
+        scenes: a.scenes,
+        frames: walk,
+        ..SynthOptions::default()
+    })?;
+    Ok(Every::new(Box::new(scenes), step))
+}
+
+/// The core's configuration at `--cell`, with constant misses if asked.
+fn map_config(a: &DemoArgs) -> Config {
+    let mut config = Config::with_cell_size(a.cell);
+    if a.constant_miss {
+        config.miss_model = MissModel::Constant;
+    }
+    config
+}
+
+/// A few frames to draw: a third and two thirds of the way into each trajectory.
+fn frames_to_draw(split: &Every) -> Vec<FrameId> {
     let mut keep: Vec<FrameId> = Vec::new();
     for (_, ids) in split.trajectories() {
         keep.push(ids[ids.len() / 3].clone());
         keep.push(ids[2 * ids.len() / 3].clone());
     }
     keep.dedup();
+    keep
+}
 
-    let n = split.frames().len() as u64;
-    let mut runs: Vec<(&str, Evaluation)> = Vec::new();
-    for (name, labels, dir) in [
-        ("ground truth", LabelSource::Gt, "gt"),
-        ("predicted", LabelSource::Pred, "pred"),
-    ] {
-        let bar = progress(2 * n, &format!("{dir} labels"));
-        let eval = evaluate(
-            &split,
-            &EvalOptions {
-                out: Some(o.out.join("backprojection").join(dir)),
-                keep_frames: keep.clone(),
-                keep_maps: labels == LabelSource::Gt,
-                ..EvalOptions::new(config, labels)
-            },
-            &|| bar.inc(1),
-        )?;
-        bar.finish_and_clear();
-        runs.push((name, eval));
-    }
+/// Maps and evaluates the split with `labels`, writing back-projections under
+/// `<out>/backprojection/{gt,pred}/` and keeping the `keep` frames' renders (and, with
+/// ground-truth labels, the maps, for the bird's-eye views).
+fn evaluate_with(
+    split: &Every,
+    config: Config,
+    labels: LabelSource,
+    keep: &[FrameId],
+    a: &DemoArgs,
+) -> Result<Evaluation> {
+    let dir = if labels == LabelSource::Gt {
+        "gt"
+    } else {
+        "pred"
+    };
+    let bar = progress(2 * split.frames().len() as u64, &format!("{dir} labels"));
+    let eval = evaluate(
+        split,
+        &EvalOptions {
+            out: Some(a.out.join("backprojection").join(dir)),
+            keep_frames: keep.to_vec(),
+            keep_maps: labels == LabelSource::Gt,
+            ..EvalOptions::new(config, labels)
+        },
+        &|| bar.inc(1),
+    )?;
+    bar.finish_and_clear();
+    Ok(eval)
+}
 
+/// The scores of both maps and of the network alone, as a Markdown table beside the
+/// paper's S-NDT numbers on Hypersim at the same cell size (when the paper has it).
+fn print_paper_comparison(cell: f32, runs: &Runs) {
     let paper = PAPER_SNDT
         .iter()
-        .find(|p| (p.0 - o.cell).abs() < 1e-3)
+        .find(|p| (p.0 - cell).abs() < 1e-3)
         .copied();
     println!();
     println!(
         "| labels | mIoU | invR | mPAcc | update | paper S-NDT (Hypersim) mIoU / invR / mPAcc |"
     );
     println!("|---|---|---|---|---|---|");
-    for (k, (name, e)) in runs.iter().enumerate() {
+    for (k, (name, e)) in [("ground truth", &runs.gt), ("predicted", &runs.pred)]
+        .into_iter()
+        .enumerate()
+    {
         let m = e.metrics();
         let ms = e.mean_update_ms();
         let reference = paper.map_or("-".to_string(), |p| {
@@ -125,7 +179,7 @@ pub fn run(o: &DemoOptions) -> Result<()> {
             1e3 / ms
         );
     }
-    let net = runs[1].1.input.metrics();
+    let net = network_alone(runs);
     println!(
         "| network alone (no map) | {:.2} % | - | {:.2} % | - | ESANet {PAPER_ESANET_MIOU:.2} % mIoU |",
         net.miou * 100.0,
@@ -137,68 +191,90 @@ pub fn run(o: &DemoOptions) -> Result<()> {
             p.3
         );
     }
+}
 
-    // Pictures.
-    println!();
-    let (gt_run, pred_run) = (&runs[0].1, &runs[1].1);
-    for id in &keep {
+/// The network's own predictions scored on the frames (no map).
+fn network_alone(runs: &Runs) -> Metrics {
+    runs.pred.input.metrics()
+}
+
+/// Per kept frame: ground truth | network prediction | map from GT labels | map from
+/// predicted labels, side by side.
+fn write_frame_pictures(split: &Every, keep: &[FrameId], runs: &Runs, a: &DemoArgs) -> Result<()> {
+    for id in keep {
         let f = split.load(id)?;
         let (w, h) = (f.rays.width(), f.rays.height());
         let gt = f.labels.clone().unwrap_or_default();
         let net = f.predictions.as_ref().map(|p| p.top1()).unwrap_or_default();
         let find = |e: &Evaluation| e.kept.iter().find(|(k, _)| k == id).map(|(_, v)| v.clone());
-        let (Some(bg), Some(bp)) = (find(gt_run), find(pred_run)) else {
+        let (Some(bg), Some(bp)) = (find(&runs.gt), find(&runs.pred)) else {
             continue;
         };
-        let path = o.out.join(format!("frame_{}_{}.png", id.scene, id.stem()));
+        let path = a.out.join(format!("frame_{}_{}.png", id.scene, id.stem()));
         picture::side_by_side(&path, w, h, &[&gt, &net, &bg, &bp], render_color)?;
         println!(
             "wrote {} (ground truth | network prediction | map from GT labels | map from predicted labels)",
             path.display()
         );
     }
-    for (map, t) in gt_run.maps.iter().zip(&gt_run.trajectories) {
+    Ok(())
+}
+
+/// Each trajectory's map (from ground-truth labels) seen from above, ceiling removed.
+fn write_birdseye_views(gt: &Evaluation, a: &DemoArgs) -> Result<()> {
+    for (map, t) in gt.maps.iter().zip(&gt.trajectories) {
         let scene = t.name.split('/').next().unwrap_or("map");
-        let path = o.out.join(format!("birdseye_{scene}.png"));
+        let path = a.out.join(format!("birdseye_{scene}.png"));
         picture::birds_eye(&path, map.as_ref(), 2.2)?;
         println!(
             "wrote {} (semantic map from above, ceiling removed)",
             path.display()
         );
     }
-    let path = o.out.join("iou.svg");
-    let (iou_gt, iou_pred, iou_net) = (
-        gt_run.metrics().iou,
-        pred_run.metrics().iou,
-        pred_run.input.metrics().iou,
-    );
+    Ok(())
+}
+
+/// The per-class IoU chart (`iou.svg`) and all numbers (`metrics.json`).
+fn write_iou_chart_and_metrics(runs: &Runs, a: &DemoArgs) -> Result<()> {
+    let path = a.out.join("iou.svg");
     chart::iou_bars(
         &path,
-        &format!("Per-class IoU, cell {:.0} cm", o.cell * 100.0),
+        &format!("Per-class IoU, cell {:.0} cm", a.cell * 100.0),
         &[
-            ("map, GT labels", &iou_gt),
-            ("map, predicted labels", &iou_pred),
-            ("network alone", &iou_net),
+            ("map, GT labels", &runs.gt.metrics().iou),
+            ("map, predicted labels", &runs.pred.metrics().iou),
+            ("network alone", &network_alone(runs).iou),
         ],
     )?;
     println!("wrote {} (per-class IoU)", path.display());
+    let net = network_alone(runs);
     let json = serde_json::json!({
-        "cell": o.cell,
-        "gt": gt_run.to_json(),
-        "pred": pred_run.to_json(),
+        "cell": a.cell,
+        "gt": runs.gt.to_json(),
+        "pred": runs.pred.to_json(),
         "network_alone": { "miou": net.miou, "mpacc": net.mpacc },
     });
     std::fs::write(
-        o.out.join("metrics.json"),
+        a.out.join("metrics.json"),
         serde_json::to_string_pretty(&json)?,
     )?;
     println!(
         "wrote {}/metrics.json and back-projections under {}/backprojection/{{gt,pred}}/",
-        o.out.display(),
-        o.out.display()
+        a.out.display(),
+        a.out.display()
     );
-    println!();
+    Ok(())
+}
+
+/// Per class present in the ground truth: IoU of the map from GT labels, from predicted
+/// labels, and of the network alone.
+fn print_per_class_iou(runs: &Runs) {
     println!("per-class IoU (map from GT labels / from predicted labels / network alone):");
+    let (iou_gt, iou_pred, iou_net) = (
+        runs.gt.metrics().iou,
+        runs.pred.metrics().iou,
+        network_alone(runs).iou,
+    );
     let pct = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{:.1}", x * 100.0));
     for c in (1..=40).filter(|&c| iou_gt[c].is_some()) {
         println!(
@@ -210,6 +286,22 @@ pub fn run(o: &DemoOptions) -> Result<()> {
             pct(iou_net[c])
         );
     }
-    println!("\ndone in {:.0} s", start.elapsed().as_secs_f64());
-    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    /// Parses `sndt demo` the way the command line does.
+    #[derive(Parser)]
+    struct Demo {
+        #[command(flatten)]
+        args: DemoArgs,
+    }
+
+    #[test]
+    fn default_is_the_command_lines_default() {
+        assert_eq!(Demo::parse_from(["demo"]).args, DemoArgs::default());
+    }
 }

@@ -143,7 +143,7 @@ impl TopK {
 }
 
 /// Which labels to attach to points.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LabelSource {
     /// Ground-truth labels (void pixels add geometry only).
     Gt,

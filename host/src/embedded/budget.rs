@@ -219,60 +219,6 @@ pub fn table(
     s
 }
 
-/// `sndt budget`: the memory report for `Map<capacity, blocks, classes>` (blocks default
-/// to `capacity / 8`, the firmware's ratio) and, given a dataset directory, the peak
-/// occupancy and evictions of each of its trajectories at that capacity (rounded up to a
-/// compiled one, 40 classes, ground-truth labels).
-pub fn command(
-    cell: f32,
-    classes: usize,
-    capacity: usize,
-    blocks: Option<usize>,
-    dataset: Option<&std::path::Path>,
-    split: Option<String>,
-    stride: u32,
-) -> Result<String> {
-    if !(1..=254).contains(&classes) {
-        bail!("--classes must be in 1..=254");
-    }
-    if capacity == 0 || capacity >= u32::MAX as usize {
-        bail!("--capacity must be in 1..2^32-1");
-    }
-    let blocks = blocks.unwrap_or(capacity.div_ceil(8)).max(1);
-    let mut s = report(cell, classes, capacity, blocks);
-    let Some(root) = dataset else {
-        return Ok(s);
-    };
-    let config = Config::with_cell_size(cell);
-    config
-        .validate()
-        .map_err(|_| anyhow::anyhow!("--cell {cell} is not a valid cell size"))?;
-    let Some(cap) = pick_capacity(capacity, blocks) else {
-        bail!(
-            "no compiled capacity holds {capacity} voxels and {blocks} blocks (largest: {:?})",
-            CAPACITIES[CAPACITIES.len() - 1]
-        );
-    };
-    let options = crate::dataset::source::OpenOptions {
-        split,
-        ..Default::default()
-    };
-    let ds = crate::dataset::open::open(root, &options)?;
-    s += &format!("\n{}\n", ds.describe());
-    if cap != (capacity, blocks) {
-        s += &format!(
-            "simulating Map<{}, {}, 40> (the smallest compiled capacity holding {capacity} voxels and {blocks} blocks)\n",
-            cap.0, cap.1
-        );
-    }
-    if classes != 40 {
-        s += "the simulation uses 40 classes (NYU40 labels)\n";
-    }
-    let rows = simulate_dataset(ds.as_ref(), config, cap, stride)?;
-    s += &table(&rows, cap, (capacity, blocks));
-    Ok(s)
-}
-
 /// `n` frames of the built-in box room (`room::orbit`) at `width x height`, as dataset
 /// frames of one trajectory `room/cam_00` (for tests and examples).
 pub fn room_frames(n: usize, width: u32, height: u32) -> Vec<Frame> {

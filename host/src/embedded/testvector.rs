@@ -599,46 +599,6 @@ pub fn summary(v: &TestVector, run: &VectorRun) -> String {
     s
 }
 
-/// `sndt testvector`: `--out DIR` writes `DIR/frames.bin` and `DIR/expected_crc.txt`;
-/// `--check FILE` integrates a vector and prints the summary (last line `crc 0x........`),
-/// failing when `expected_crc.txt` beside it disagrees or a probe misses.
-pub fn command(out: Option<&std::path::Path>, check: Option<&std::path::Path>) -> Result<String> {
-    match (out, check) {
-        (Some(dir), None) => {
-            let r = write(dir)?;
-            let v = generate();
-            Ok(format!(
-                "{}wrote {} and {}",
-                summary(&v, &r),
-                dir.join("frames.bin").display(),
-                dir.join("expected_crc.txt").display()
-            ))
-        }
-        (None, Some(file)) => {
-            let bytes =
-                std::fs::read(file).with_context(|| format!("reading {}", file.display()))?;
-            let v = TestVector::parse(&bytes)?;
-            let r = run(&v)?;
-            let s = summary(&v, &r);
-            if let Some(p) = r.probes.iter().find(|p| !p.ok()) {
-                bail!("{s}probe {:?} is wrong", p.pixel);
-            }
-            let txt = file.with_file_name("expected_crc.txt");
-            if txt.is_file() {
-                let want = parse_crc(&std::fs::read_to_string(&txt)?)?;
-                ensure!(
-                    want == r.crc,
-                    "{s}CRC {:#010x} differs from {} ({want:#010x})",
-                    r.crc,
-                    txt.display()
-                );
-            }
-            Ok(s.trim_end().to_string())
-        }
-        _ => bail!("give exactly one of --out DIR or --check FILE"),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,8 +1,6 @@
 //! Coloured point clouds as binary little-endian PLY (for MeshLab, CloudCompare, Blender).
 
-use crate::dataset::frame::{Frame, FrameId};
-use crate::dataset::source::OpenOptions;
-use crate::dataset::{self};
+use crate::dataset::frame::Frame;
 use anyhow::{Context, Result};
 use std::fmt;
 use std::fs::File;
@@ -129,23 +127,4 @@ pub fn write_frame_cloud(frame: &Frame, out: &Path) -> Result<CloudSummary> {
         points: points.len(),
         bounds,
     })
-}
-
-/// `sndt cloud`: opens the dataset at `root` ([`dataset::open`]), loads frame `frame`
-/// (`scene/cam/NNNN`) and writes its coloured world points to `out`.
-pub fn cloud_command(
-    root: &Path,
-    frame: &str,
-    out: &Path,
-    options: &OpenOptions,
-) -> Result<CloudSummary> {
-    let data = dataset::open(root, options)?;
-    let id = FrameId::parse(frame)?;
-    let frame = data
-        .load(&id)
-        .with_context(|| format!("loading frame {id} of {}", root.display()))?;
-    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
-    write_frame_cloud(&frame, out)
 }

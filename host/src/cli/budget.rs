@@ -1,0 +1,97 @@
+//! `sndt budget`: the exact memory of a `Map<N, B, K>` and, given a dataset, the peak
+//! occupancy and evictions of each trajectory at that capacity.
+
+use crate::dataset::open::open;
+use crate::dataset::source::OpenOptions;
+use crate::embedded::budget::{pick_capacity, report, simulate_dataset, table, CAPACITIES};
+use anyhow::{bail, Result};
+use sndt_core::Config;
+use std::path::PathBuf;
+
+/// Arguments of `sndt budget`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct BudgetArgs {
+    /// Voxel edge in metres.
+    #[arg(long, default_value_t = 0.10)]
+    pub cell: f32,
+    /// Classes K.
+    #[arg(long, default_value_t = 40)]
+    pub classes: usize,
+    /// Surface voxel capacity N.
+    #[arg(long)]
+    pub capacity: usize,
+    /// Occupancy block capacity B (default N / 8).
+    #[arg(long)]
+    pub blocks: Option<usize>,
+    /// Dataset directory: simulate each trajectory at this capacity.
+    #[arg(long)]
+    pub dataset: Option<PathBuf>,
+    /// Split of the prepared layout.
+    #[arg(long)]
+    pub split: Option<String>,
+    /// Use every stride-th pixel of the dataset frames.
+    #[arg(long, default_value_t = 1)]
+    pub stride: u32,
+}
+
+/// Runs `sndt budget` and prints its report.
+pub fn run(a: &BudgetArgs) -> Result<()> {
+    println!("{}", budget(a)?);
+    Ok(())
+}
+
+/// The memory report for `Map<capacity, blocks, classes>` (blocks default to
+/// `capacity / 8`, the firmware's ratio) and, given a dataset directory, the peak
+/// occupancy and evictions of each of its trajectories at that capacity (rounded up to a
+/// compiled one, 40 classes, ground-truth labels).
+///
+/// ```
+/// use sndt_host::cli::budget::{budget, BudgetArgs};
+/// let mut a = BudgetArgs { cell: 0.1, classes: 40, capacity: 4096, blocks: Some(512),
+///                          dataset: None, split: None, stride: 1 };
+/// assert!(budget(&a).unwrap().contains("= 487552 bytes"));
+/// a.classes = 0;
+/// assert!(budget(&a).is_err());
+/// ```
+pub fn budget(a: &BudgetArgs) -> Result<String> {
+    let (cell, classes, capacity) = (a.cell, a.classes, a.capacity);
+    if !(1..=254).contains(&classes) {
+        bail!("--classes must be in 1..=254");
+    }
+    if capacity == 0 || capacity >= u32::MAX as usize {
+        bail!("--capacity must be in 1..2^32-1");
+    }
+    let blocks = a.blocks.unwrap_or(capacity.div_ceil(8)).max(1);
+    let mut s = report(cell, classes, capacity, blocks);
+    let Some(root) = a.dataset.as_deref() else {
+        return Ok(s);
+    };
+    let config = Config::with_cell_size(cell);
+    config
+        .validate()
+        .map_err(|_| anyhow::anyhow!("--cell {cell} is not a valid cell size"))?;
+    let Some(cap) = pick_capacity(capacity, blocks) else {
+        bail!(
+            "no compiled capacity holds {capacity} voxels and {blocks} blocks (largest: {:?})",
+            CAPACITIES[CAPACITIES.len() - 1]
+        );
+    };
+    let options = OpenOptions {
+        split: a.split.clone(),
+        ..Default::default()
+    };
+    let ds = open(root, &options)?;
+    s += &format!("\n{}\n", ds.describe());
+    if cap != (capacity, blocks) {
+        s += &format!(
+            "simulating Map<{}, {}, 40> (the smallest compiled capacity holding {capacity} voxels and {blocks} blocks)\n",
+            cap.0, cap.1
+        );
+    }
+    if classes != 40 {
+        s += "the simulation uses 40 classes (NYU40 labels)\n";
+    }
+    let rows = simulate_dataset(ds.as_ref(), config, cap, a.stride)?;
+    s += &table(&rows, cap, (capacity, blocks));
+    Ok(s)
+}

@@ -1,0 +1,53 @@
+//! `sndt cloud`: one frame's world points, coloured by label, as a PLY point cloud.
+
+use crate::dataset::frame::FrameId;
+use crate::dataset::open::open;
+use crate::dataset::source::OpenOptions;
+use crate::output::ply::{write_frame_cloud, CloudSummary};
+use anyhow::{Context, Result};
+use std::path::{Path, PathBuf};
+
+/// Arguments of `sndt cloud`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct CloudArgs {
+    /// Dataset directory (prepared layout or raw Hypersim).
+    pub dataset: PathBuf,
+    /// The frame, as `<scene>/<cam>/<NNNN>`.
+    #[arg(long)]
+    pub frame: String,
+    /// Output PLY file.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Split of the prepared layout.
+    #[arg(long, default_value = "test")]
+    pub split: String,
+    /// Use the authors' v0.3.1 fy = 927.06 (prepared layout without intrinsics).
+    #[arg(long)]
+    pub paper_fy: bool,
+}
+
+/// Runs `sndt cloud` and prints what it wrote.
+pub fn run(a: &CloudArgs) -> Result<()> {
+    let options = OpenOptions {
+        split: Some(a.split.clone()),
+        paper_fy: a.paper_fy,
+        predictions: None,
+    };
+    println!("{}", cloud(&a.dataset, &a.frame, &a.out, &options)?);
+    Ok(())
+}
+
+/// Opens the dataset at `root` ([`open`]), loads frame `frame` (`scene/cam/NNNN`) and
+/// writes its coloured world points to `out` ([`write_frame_cloud`]), creating `out`'s
+/// directory.
+pub fn cloud(root: &Path, frame: &str, out: &Path, options: &OpenOptions) -> Result<CloudSummary> {
+    let data = open(root, options)?;
+    let id = FrameId::parse(frame)?;
+    let frame = data
+        .load(&id)
+        .with_context(|| format!("loading frame {id} of {}", root.display()))?;
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    write_frame_cloud(&frame, out)
+}

@@ -1,0 +1,307 @@
+//! `sndt compare`: integrate one trajectory's frames into the core and the f64 reference
+//! ([`crate::eval::compare`]) at each cell size and print how far apart the maps are.
+
+use crate::cli::labels::LabelArg;
+use crate::dataset::frame::LabelSource;
+use crate::dataset::open::open;
+use crate::dataset::source::{Dataset, OpenOptions};
+use crate::dataset::synthetic::{SynthOptions, Synthetic};
+use crate::eval::compare::{compare_cells, Agreement, CellReport, Options, Report};
+use crate::eval::compare::{CLASSES, TOLERANCES};
+use crate::eval::metrics::Metrics;
+use anyhow::{bail, Context, Result};
+use sndt_core::{Config, MissModel};
+use std::borrow::Cow;
+use std::fmt;
+use std::path::Path;
+
+/// Arguments of `sndt compare`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct CompareArgs {
+    /// Dataset directory (any layout `dataset::open` reads), or `synthetic` for the default
+    /// synthetic split rendered on the fly (no files).
+    pub dataset: String,
+    /// Cell sizes in metres, comma separated.
+    #[arg(long, value_delimiter = ',', default_value = "0.1")]
+    pub cell: Vec<f32>,
+    /// Frames of the trajectory: `N` (the first N) or a range `A..B` (default: all).
+    #[arg(long)]
+    pub frames: Option<String>,
+    /// Labels attached to the points.
+    #[arg(long, value_enum, default_value_t = LabelArg::Gt)]
+    pub labels: LabelArg,
+    /// Integrate every stride-th pixel in both directions (rendering uses all pixels).
+    #[arg(long, default_value_t = 1)]
+    pub stride: u32,
+    /// Split of the prepared layout.
+    #[arg(long)]
+    pub split: Option<String>,
+    /// Trajectory `scene/cam` (default: the first).
+    #[arg(long)]
+    pub trajectory: Option<String>,
+    /// Use constant misses instead of NDT-OM misses.
+    #[arg(long)]
+    pub constant_miss: bool,
+}
+
+/// Runs `sndt compare` and prints the report ([`ReportTable`]).
+pub fn run(args: &CompareArgs) -> Result<()> {
+    println!("{}", ReportTable(&compare_report(args)?));
+    Ok(())
+}
+
+/// Parses `--frames`: `N` = `0..N`, `A..B`, or `A..` (to the end), within `0..len`.
+///
+/// ```
+/// use sndt_host::cli::compare::frame_range;
+/// assert_eq!(frame_range(Some("20"), 100).unwrap(), 0..20);
+/// assert_eq!(frame_range(Some("10..30"), 100).unwrap(), 10..30);
+/// assert_eq!(frame_range(Some("90.."), 100).unwrap(), 90..100);
+/// assert_eq!(frame_range(None, 100).unwrap(), 0..100);
+/// assert!(frame_range(Some("30..10"), 100).is_err());
+/// assert!(frame_range(Some("200"), 100).is_err());
+/// ```
+pub fn frame_range(spec: Option<&str>, len: usize) -> Result<std::ops::Range<usize>> {
+    let parse = |s: &str| -> Result<usize> {
+        s.trim()
+            .parse()
+            .with_context(|| format!("--frames: {s:?} is not a frame number"))
+    };
+    let range = match spec {
+        None => 0..len,
+        Some(s) => match s.split_once("..") {
+            None => 0..parse(s)?,
+            Some((a, b)) if b.trim().is_empty() => parse(a)?..len,
+            Some((a, b)) => parse(a)?..parse(b)?,
+        },
+    };
+    if range.start >= range.end || range.end > len {
+        bail!(
+            "--frames {}: need a non-empty range within the trajectory's {len} frames",
+            spec.unwrap_or("")
+        );
+    }
+    Ok(range)
+}
+
+/// Opens the dataset, picks the trajectory and frames, and compares the core with the
+/// reference at every `--cell`.
+pub fn compare_report(args: &CompareArgs) -> Result<Report> {
+    let labels = LabelSource::from(args.labels);
+    let data = open_dataset(args, labels)?;
+    let trajectories = data.trajectories();
+    let (name, ids) = match &args.trajectory {
+        None => trajectories.first(),
+        Some(t) => trajectories.iter().find(|(name, _)| name == t),
+    }
+    .with_context(|| {
+        format!(
+            "{}: no trajectory {}",
+            args.dataset,
+            args.trajectory.as_deref().unwrap_or("")
+        )
+    })?;
+    let range = frame_range(args.frames.as_deref(), ids.len())?;
+    let ids = &ids[range.clone()];
+    let configs = configs(&args.cell, args.constant_miss)?;
+    let source = format!(
+        "{}, trajectory {name}, frames {}..{}",
+        data.describe(),
+        range.start,
+        range.end
+    );
+    let options = Options {
+        labels,
+        stride: args.stride.max(1),
+    };
+    compare_cells(source, ids.len(), &configs, &options, |i| {
+        Ok(Cow::Owned(data.load(&ids[i])?))
+    })
+}
+
+/// `synthetic` is one default synthetic scene rendered on the fly (with predictions only
+/// when the labels need them); anything else is a directory for [`open`].
+fn open_dataset(args: &CompareArgs, labels: LabelSource) -> Result<Box<dyn Dataset>> {
+    if args.dataset == "synthetic" {
+        let predictions = matches!(labels, LabelSource::Pred | LabelSource::PredTopk);
+        return Ok(Box::new(Synthetic::new(SynthOptions {
+            scenes: 1,
+            predictions,
+            ..SynthOptions::default()
+        })?));
+    }
+    let options = OpenOptions {
+        split: args.split.clone(),
+        ..Default::default()
+    };
+    open(Path::new(&args.dataset), &options)
+}
+
+/// One valid core configuration per cell size.
+fn configs(cells: &[f32], constant_miss: bool) -> Result<Vec<Config>> {
+    if cells.is_empty() {
+        bail!("--cell: no cell size");
+    }
+    cells
+        .iter()
+        .map(|&c| {
+            let mut config = Config::with_cell_size(c);
+            if constant_miss {
+                config.miss_model = MissModel::Constant;
+            }
+            config
+                .validate()
+                .map_err(|_| anyhow::anyhow!("--cell {c}: not a valid cell size"))?;
+            Ok(config)
+        })
+        .collect()
+}
+
+/// A [`Report`] as `sndt compare` prints it: what was compared, a Markdown table with one
+/// column per cell size, and the tolerances any cell size misses.
+pub struct ReportTable<'a>(pub &'a Report);
+
+impl fmt::Display for ReportTable<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let report = self.0;
+        write_header(f, report)?;
+        write_map_rows(f, &report.cells)?;
+        write_rendering_rows(f, &report.cells)?;
+        write_missed_tolerances(f, &report.cells)
+    }
+}
+
+/// One table row: `what`, then `cell` of each cell size's report.
+fn row(
+    f: &mut fmt::Formatter<'_>,
+    cells: &[CellReport],
+    what: &str,
+    cell: &dyn Fn(&CellReport) -> String,
+) -> fmt::Result {
+    write!(f, "| {what} |")?;
+    for c in cells {
+        write!(f, " {} |", cell(c))?;
+    }
+    writeln!(f)
+}
+
+/// An agreement as a percentage of its total.
+fn pct(a: &Agreement) -> String {
+    format!("{:.3} % of {}", a.fraction() * 100.0, a.total)
+}
+
+/// What was compared, and the table's head (one column per cell size).
+fn write_header(f: &mut fmt::Formatter<'_>, r: &Report) -> fmt::Result {
+    writeln!(f, "sndt compare: {}", r.source)?;
+    writeln!(
+        f,
+        "{} frames, {} points per map (labels {:?}, stride {}), misses {:?}; core Map<{}, {}, {}> vs f64 reference",
+        r.frames,
+        r.points,
+        r.options.labels,
+        r.options.stride,
+        r.miss_model,
+        1 << 19,
+        1 << 17,
+        CLASSES
+    )?;
+    writeln!(f)?;
+    write!(f, "| cell |")?;
+    for c in &r.cells {
+        write!(f, " {:.0} cm |", c.cell_size * 100.0)?;
+    }
+    writeln!(f)?;
+    write!(f, "|---|")?;
+    for _ in &r.cells {
+        write!(f, "---:|")?;
+    }
+    writeln!(f)
+}
+
+/// The rows comparing the maps themselves: voxel sets, Gaussians, occupancy, classes.
+fn write_map_rows(f: &mut fmt::Formatter<'_>, cells: &[CellReport]) -> fmt::Result {
+    row(f, cells, "surface voxels in both", &|c| c.both.to_string())?;
+    row(f, cells, "only core / only reference", &|c| {
+        format!("{} / {}", c.only_core, c.only_ref)
+    })?;
+    row(f, cells, "point counts differing", &|c| {
+        c.count_mismatch.to_string()
+    })?;
+    row(f, cells, "mean error: mean / p99 / max (mm)", &|c| {
+        let e = &c.mean_error_mm;
+        format!("{:.3} / {:.3} / {:.3}", e.mean, e.p99, e.max)
+    })?;
+    row(f, cells, "covariance rel. error: median / p99 (%)", &|c| {
+        let e = &c.covariance_error;
+        format!("{:.3} / {:.2}", e.median * 100.0, e.p99 * 100.0)
+    })?;
+    row(f, cells, "occupancy agreement, observed voxels", &|c| {
+        pct(&c.occupancy)
+    })?;
+    row(f, cells, "occupancy agreement, surface voxels", &|c| {
+        pct(&c.surface_occupancy)
+    })?;
+    row(f, cells, "class agreement", &|c| pct(&c.class))?;
+    row(f, cells, "core voxels with a tied class argmax", &|c| {
+        c.core_class_ties.to_string()
+    })
+}
+
+/// The rows comparing the back-projections (paper metrics, equal pixels) and the cost.
+fn write_rendering_rows(f: &mut fmt::Formatter<'_>, cells: &[CellReport]) -> fmt::Result {
+    let bp = |c: &CellReport, m: &dyn Fn(&Metrics) -> f64| match &c.back_projection {
+        Some(b) => {
+            let (a, r) = (m(&b.core) * 100.0, m(&b.reference) * 100.0);
+            format!("{a:.2} / {r:.2} ({:+.3})", a - r)
+        }
+        None => "-".into(),
+    };
+    row(f, cells, "mIoU core / ref (diff), %", &|c| {
+        bp(c, &|m| m.miou)
+    })?;
+    row(f, cells, "invR core / ref (diff), %", &|c| {
+        bp(c, &|m| m.invr)
+    })?;
+    row(f, cells, "mPAcc core / ref (diff), %", &|c| {
+        bp(c, &|m| m.mpacc)
+    })?;
+    row(
+        f,
+        cells,
+        "rendered labels equal",
+        &|c| match &c.back_projection {
+            Some(b) => pct(&b.pixels),
+            None => "-".into(),
+        },
+    )?;
+    row(f, cells, "core evicted voxels / blocks / dropped", &|c| {
+        let s = &c.core_stats;
+        format!(
+            "{} / {} / {}",
+            s.voxels_evicted,
+            s.blocks_evicted,
+            s.dropped_points + s.dropped_misses
+        )
+    })?;
+    row(f, cells, "integration core / ref (s)", &|c| {
+        format!("{:.2} / {:.2}", c.core_seconds, c.reference_seconds)
+    })
+}
+
+/// A paragraph per cell size that misses [`TOLERANCES`] (the `reference` test asserts
+/// them at 10 cm only, so other cell sizes may miss them).
+fn write_missed_tolerances(f: &mut fmt::Formatter<'_>, cells: &[CellReport]) -> fmt::Result {
+    for c in cells {
+        let v = c.violations(&TOLERANCES);
+        if !v.is_empty() {
+            writeln!(f)?;
+            writeln!(
+                f,
+                "{:.0} cm misses the core-vs-reference tolerances (asserted at 10 cm): {}",
+                c.cell_size * 100.0,
+                v.join("; ")
+            )?;
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,101 @@
+//! `sndt map`: map every trajectory of a dataset and evaluate the back-projections with the
+//! paper's evaluation protocol (docs/ARCHITECTURE.md).
+
+use crate::cli::labels::LabelArg;
+use crate::cli::open_args::OpenArgs;
+use crate::dataset::frame::LabelSource;
+use crate::dataset::open::open_spec;
+use crate::eval::evaluate::{evaluate, EvalOptions, Evaluation};
+use crate::output::progress::progress;
+use anyhow::{Context, Result};
+use sndt_core::Config;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `sndt map`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct MapArgs {
+    /// Dataset directory (prepared layout or raw Hypersim), or `synthetic[:SCENES:FRAMES]`.
+    pub dataset: String,
+    /// Voxel edge in metres.
+    #[arg(long, default_value_t = 0.10)]
+    pub cell: f32,
+    /// Labels fed to the map.
+    #[arg(long, value_enum, default_value = "gt")]
+    pub labels: LabelArg,
+    /// Output directory: back-projection PNGs `<out>/<scene>/<cam>/<NNNN>.png`,
+    /// metrics.json and metrics.md.
+    #[arg(long, default_value = "out/map")]
+    pub out: PathBuf,
+    /// How to open the dataset.
+    #[command(flatten)]
+    pub open: OpenArgs,
+    /// Use every stride-th pixel when mapping.
+    #[arg(long, default_value_t = 1)]
+    pub stride: u32,
+    /// About how many votes a voxel takes from one frame (1..=64; `Config::votes_per_frame`).
+    #[arg(long, default_value_t = Config::DEFAULT.votes_per_frame)]
+    pub votes_per_frame: u8,
+    /// Also write each trajectory's map snapshot to `<out>/maps/<scene>_<cam>.sndt`.
+    #[arg(long)]
+    pub save_maps: bool,
+}
+
+/// Runs `sndt map`: maps and evaluates every trajectory, prints the per-trajectory lines
+/// and the metrics table, and writes metrics.md and metrics.json beside the pictures.
+pub fn run(a: &MapArgs) -> Result<()> {
+    let labels = LabelSource::from(a.labels);
+    let dataset = open_spec(&a.dataset, &a.open.options())?;
+    println!("sndt map: {}", dataset.describe());
+    let frames = dataset.frames().len();
+    let bar = progress(2 * frames as u64, "map+eval");
+    let eval = evaluate(
+        dataset.as_ref(),
+        &EvalOptions {
+            out: Some(a.out.clone()),
+            stride: a.stride,
+            save_maps: a.save_maps.then(|| a.out.join("maps")),
+            ..EvalOptions::new(
+                Config {
+                    votes_per_frame: a.votes_per_frame,
+                    ..Config::with_cell_size(a.cell)
+                },
+                labels,
+            )
+        },
+        &|| bar.inc(1),
+    )?;
+    bar.finish_and_clear();
+    for t in &eval.trajectories {
+        println!(
+            "  {}: {} frames, {:.1} ms/frame, {} voxels, {} blocks, {} evicted",
+            t.name,
+            t.frames,
+            t.mean_ms(),
+            t.voxels,
+            t.blocks,
+            t.evicted
+        );
+    }
+    let table = eval.table();
+    println!(
+        "\ncell {:.0} cm, {:?} labels\n{table}",
+        a.cell * 100.0,
+        labels
+    );
+    write_metrics(&eval, &table, &a.out)
+}
+
+/// Writes the metrics table (`metrics.md`) and all numbers (`metrics.json`) into `out`.
+fn write_metrics(eval: &Evaluation, table: &str, out: &Path) -> Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    std::fs::write(out.join("metrics.md"), table)?;
+    std::fs::write(
+        out.join("metrics.json"),
+        serde_json::to_string_pretty(&eval.to_json())?,
+    )?;
+    println!(
+        "wrote {}/<scene>/<cam>/<NNNN>.png, metrics.json, metrics.md",
+        out.display()
+    );
+    Ok(())
+}

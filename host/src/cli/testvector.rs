@@ -1,0 +1,71 @@
+//! `sndt testvector`: write or check the firmware's cross-architecture test vector
+//! (`targets/cortex-m4f/vector`, see [`crate::embedded::testvector`]).
+
+use crate::embedded::testvector::{
+    generate, parse_crc, run as integrate, summary, write, TestVector,
+};
+use anyhow::{bail, ensure, Context, Result};
+use std::path::{Path, PathBuf};
+
+/// Arguments of `sndt testvector`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct TestvectorArgs {
+    /// Directory to write frames.bin and expected_crc.txt into.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// A vector to integrate and check (against expected_crc.txt beside it).
+    #[arg(long)]
+    pub check: Option<PathBuf>,
+}
+
+/// Runs `sndt testvector` and prints the summary.
+pub fn run(a: &TestvectorArgs) -> Result<()> {
+    println!("{}", testvector(a.out.as_deref(), a.check.as_deref())?);
+    Ok(())
+}
+
+/// `--out DIR` writes `DIR/frames.bin` and `DIR/expected_crc.txt`; `--check FILE`
+/// integrates a vector and returns the summary (last line `crc 0x........`), failing when
+/// `expected_crc.txt` beside it disagrees or a probe misses.
+pub fn testvector(out: Option<&Path>, check: Option<&Path>) -> Result<String> {
+    match (out, check) {
+        (Some(dir), None) => write_vector(dir),
+        (None, Some(file)) => check_vector(file),
+        _ => bail!("give exactly one of --out DIR or --check FILE"),
+    }
+}
+
+/// Writes the vector into `dir`; the summary ends with the two files written.
+fn write_vector(dir: &Path) -> Result<String> {
+    let r = write(dir)?;
+    let v = generate();
+    Ok(format!(
+        "{}wrote {} and {}",
+        summary(&v, &r),
+        dir.join("frames.bin").display(),
+        dir.join("expected_crc.txt").display()
+    ))
+}
+
+/// Integrates the vector in `file` and checks its probes and, when `expected_crc.txt`
+/// lies beside it, its CRC.
+fn check_vector(file: &Path) -> Result<String> {
+    let bytes = std::fs::read(file).with_context(|| format!("reading {}", file.display()))?;
+    let v = TestVector::parse(&bytes)?;
+    let r = integrate(&v)?;
+    let s = summary(&v, &r);
+    if let Some(p) = r.probes.iter().find(|p| !p.ok()) {
+        bail!("{s}probe {:?} is wrong", p.pixel);
+    }
+    let txt = file.with_file_name("expected_crc.txt");
+    if txt.is_file() {
+        let want = parse_crc(&std::fs::read_to_string(&txt)?)?;
+        ensure!(
+            want == r.crc,
+            "{s}CRC {:#010x} differs from {} ({want:#010x})",
+            r.crc,
+            txt.display()
+        );
+    }
+    Ok(s.trim_end().to_string())
+}
