@@ -252,8 +252,9 @@ mod tests {
     use crate::*;
     use std::vec::Vec;
 
-    /// The NDT-OM miss for an isotropic Gaussian (variance `var`, m^2) in f64, exactly as the
-    /// design states it; `None` when the closest point lies beyond the ray's end.
+    /// The NDT-OM miss for an isotropic Gaussian (variance `var`, m^2) in f64, straight from
+    /// its definition (closest point `t` on the ray, `p = 0.5 - lambda pN (1 - pz)`, logit);
+    /// `None` when the closest point lies beyond the ray's end.
     fn ndt_om_f64(
         cfg: &Config,
         s: [f64; 3],
