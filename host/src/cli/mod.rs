@@ -324,14 +324,17 @@ fn synth(a: &SynthArgs) -> Result<()> {
         a.out.display()
     );
     let bar = progress((a.scenes * a.frames) as u64, "synth");
-    let summary = write_split(&a.out, &split, &|| bar.inc(1))?;
+    let stats = std::sync::Mutex::new(crate::eval::label_stats::LabelStats::default());
+    let frames = write_split(&a.out, &split, &|f| {
+        let mut one = crate::eval::label_stats::LabelStats::default();
+        one.add(f);
+        stats.lock().unwrap().merge(&one);
+        bar.inc(1);
+    })?;
+    let summary = stats.into_inner().unwrap();
     bar.finish_and_clear();
     let total: u64 = summary.class_pixels.iter().sum();
-    println!(
-        "{} frames in {:.1} s",
-        summary.frames,
-        t.elapsed().as_secs_f64()
-    );
+    println!("{frames} frames in {:.1} s", t.elapsed().as_secs_f64());
     println!("ground-truth class histogram (share of all pixels):");
     for (c, &n) in summary.class_pixels.iter().enumerate() {
         if n > 0 {
