@@ -1,9 +1,9 @@
 //! Calibration of the synthetic segmentation model: prints the raw top-1 mIoU on a subsample
 //! of the default split for the parameters given on the command line.
 //! `cargo run --release -p sndt-host --example calibrate -- [frames] [confuse_easy confuse_med confuse_hard absorb warp blobs]`
-use sndt_host::dataset::synthetic::{add_stats, predict::ModelParams, SynthOptions, Synthetic};
+use sndt_host::dataset::synthetic::{predict::ModelParams, SynthOptions, Synthetic};
 use sndt_host::dataset::Dataset;
-use sndt_host::eval::metrics::Confusion;
+use sndt_host::eval::label_stats::LabelStats;
 
 fn main() {
     let a: Vec<f32> = std::env::args()
@@ -24,13 +24,12 @@ fn main() {
         ..Default::default()
     })
     .unwrap();
-    let mut conf = Confusion::default();
-    let mut hist = [0u64; 41];
+    let mut stats = LabelStats::default();
     // Every 10th frame of each trajectory: a cheap proxy of the whole split.
     for id in split.frames().iter().filter(|id| id.index % 10 == 0) {
-        add_stats(&split.load(id).unwrap(), &mut hist, &mut conf);
+        stats.add(&split.load(id).unwrap());
     }
-    let m = conf.metrics();
+    let m = stats.prediction.metrics();
     println!(
         "{model:?}\nmIoU {:.2} % mPAcc {:.2} %",
         m.miou * 100.0,

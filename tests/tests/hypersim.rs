@@ -1,5 +1,6 @@
-//! The raw Hypersim reader on the real fixture (scene ai_037_002, cam_00) in
-//! `shared/fixtures/hypersim`, and on broken copies of it.
+//! The raw Hypersim reader on the real sample (scene ai_037_002, cam_00) in
+//! `tests/fixtures/hypersim` (unmodified Hypersim files, CC BY-SA 3.0, see the README
+//! there), and on broken copies of it.
 //!
 //! Reference numbers marked "h5py" were printed by h5py 3.16 / numpy reading the same
 //! files independently of this crate's HDF5 reader.
@@ -20,8 +21,9 @@ const POSITIONS: &str = "camera_keyframe_positions.hdf5";
 /// `settings_units_info_meters_scale` of ai_037_002 in the camera CSV.
 const METERS_SCALE: f64 = 0.009999999776482582;
 
+/// The Hypersim sample checked into this crate.
 fn fixture() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/fixtures/hypersim")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/hypersim")
 }
 
 fn frame0() -> FrameId {

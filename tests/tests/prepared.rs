@@ -292,18 +292,26 @@ fn npy_bytes(descr: &str, fortran: bool, shape: &[usize], values: &[f32]) -> Vec
     out
 }
 
+/// A (3, 2, 2) top-3 array, channel-major with row-major pixels: integer part = class,
+/// fraction = score.
+#[rustfmt::skip]
+const TOPK_VALUES: [f32; 12] = [
+    1.5, 40.25, 7.75, 13.0,      // best: classes 1, 40, 7, 13
+    2.25, 39.125, 8.5, 14.0,     // second
+    3.125, 38.0625, 9.25, 15.0,  // third
+];
+
+/// Writes [`TOPK_VALUES`] as a C-order float32 `.npy` file in `dir`.
+fn write_topk_npy(dir: &Path) -> PathBuf {
+    let path = dir.join("c.npy");
+    std::fs::write(&path, npy_bytes("<f4", false, &[3, 2, 2], &TOPK_VALUES)).unwrap();
+    path
+}
+
 #[test]
 fn hand_written_npy_decodes_to_known_classes_and_scores() {
     let dir = scratch("npy");
-    // (3, 2, 2): channel-major, row-major pixels
-    #[rustfmt::skip]
-    let values = [
-        1.5, 40.25, 7.75, 13.0,      // best: classes 1, 40, 7, 13
-        2.25, 39.125, 8.5, 14.0,     // second
-        3.125, 38.0625, 9.25, 15.0,  // third
-    ];
-    let path = dir.join("c.npy");
-    std::fs::write(&path, npy_bytes("<f4", false, &[3, 2, 2], &values)).unwrap();
+    let path = write_topk_npy(&dir);
     let t = npy::read_topk(&path, 2, 2).unwrap();
     assert_eq!(
         t.classes,
@@ -324,7 +332,7 @@ fn hand_written_npy_decodes_to_known_classes_and_scores() {
     for k in 0..3 {
         for r in 0..2 {
             for c in 0..2 {
-                f[k + 3 * (r + 2 * c)] = values[k * 4 + r * 2 + c];
+                f[k + 3 * (r + 2 * c)] = TOPK_VALUES[k * 4 + r * 2 + c];
             }
         }
     }
@@ -336,16 +344,22 @@ fn hand_written_npy_decodes_to_known_classes_and_scores() {
     let path_w = dir.join("w.npy");
     npy::write_topk(&path_w, &t, 2, 2).unwrap();
     assert_eq!(npy::read_topk(&path_w, 2, 2).unwrap(), t);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
 
+#[test]
+fn malformed_npy_fails_with_the_file_named() {
+    let dir = scratch("npy-bad");
+    let path = write_topk_npy(&dir);
     // wrong shape for the requested image, and a wrong shape in the file
     assert_err_names(npy::read_topk(&path, 2, 3), &path, "shape");
     let p = dir.join("shape.npy");
-    std::fs::write(&p, npy_bytes("<f4", false, &[2, 2, 3], &values)).unwrap();
+    std::fs::write(&p, npy_bytes("<f4", false, &[2, 2, 3], &TOPK_VALUES)).unwrap();
     assert_err_names(npy::read_topk(&p, 2, 2), &p, "shape");
     // float64
     let p = dir.join("f8.npy");
     let mut b = npy_bytes("<f8", false, &[3, 2, 2], &[]);
-    for v in values {
+    for v in TOPK_VALUES {
         b.extend_from_slice(&(v as f64).to_le_bytes());
     }
     std::fs::write(&p, b).unwrap();
@@ -363,7 +377,7 @@ fn hand_written_npy_decodes_to_known_classes_and_scores() {
         ("big.npy", 41.0),
         ("nan.npy", f32::NAN),
     ] {
-        let mut v = values;
+        let mut v = TOPK_VALUES;
         v[6] = bad;
         let p = dir.join(name);
         std::fs::write(&p, npy_bytes("<f4", false, &[3, 2, 2], &v)).unwrap();
@@ -375,48 +389,82 @@ fn hand_written_npy_decodes_to_known_classes_and_scores() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-#[test]
-fn bad_inputs_fail_with_the_file_named() {
-    let root = scratch("bad");
-    let f = hand_frame("cam_00", 0, 0);
-    prepared::write_frame(&root, "test", &f).unwrap();
-    prepared::write_split_list(&root, "test", std::slice::from_ref(&f.id)).unwrap();
-    let split = root.join("test");
-    let file =
-        |kind: &str, ext: &str| split.join(format!("{kind}/synth_00_room/cam_00/0000.{ext}"));
-    let reload = || open(&root, false).unwrap().load(&f.id);
-    reload().unwrap();
+/// A one-frame prepared split in a fresh directory, to be broken one file at a time.
+struct OneFrame {
+    root: PathBuf,
+    frame: Frame,
+}
 
+impl OneFrame {
+    fn new(name: &str) -> OneFrame {
+        let root = scratch(name);
+        let frame = hand_frame("cam_00", 0, 0);
+        prepared::write_frame(&root, "test", &frame).unwrap();
+        prepared::write_split_list(&root, "test", std::slice::from_ref(&frame.id)).unwrap();
+        let one = OneFrame { root, frame };
+        one.reload().unwrap();
+        one
+    }
+
+    /// The frame's file of one kind (`depth`, `semantic_40`, `extrinsics`, `esanet`).
+    fn file(&self, kind: &str, ext: &str) -> PathBuf {
+        self.root
+            .join(format!("test/{kind}/synth_00_room/cam_00/0000.{ext}"))
+    }
+
+    /// The camera's intrinsics file.
+    fn intrinsics(&self) -> PathBuf {
+        self.root.join("test/intrinsics/synth_00_room/cam_00.json")
+    }
+
+    /// Opens the split afresh and loads the frame.
+    fn reload(&self) -> anyhow::Result<Frame> {
+        open(&self.root, false)?.load(&self.frame.id)
+    }
+}
+
+impl Drop for OneFrame {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.root);
+    }
+}
+
+#[test]
+fn bad_depth_png_fails_with_the_file_named() {
+    let one = OneFrame::new("bad-depth");
     // missing and truncated depth PNG
-    let depth = file("depth", "png");
+    let depth = one.file("depth", "png");
     let good = std::fs::read(&depth).unwrap();
     std::fs::remove_file(&depth).unwrap();
-    assert_err_names(reload(), &depth, "");
+    assert_err_names(one.reload(), &depth, "");
     std::fs::write(&depth, &good[..good.len() / 2]).unwrap();
-    assert_err_names(reload(), &depth, "");
+    assert_err_names(one.reload(), &depth, "");
     std::fs::write(&depth, &good).unwrap();
-    reload().unwrap();
-
+    one.reload().unwrap();
     // 8-bit depth PNG
     write_png(&depth, 16, 12, png::BitDepth::Eight, &[1; 16 * 12]);
-    assert_err_names(reload(), &depth, "Sixteen");
-    std::fs::write(&depth, &good).unwrap();
+    assert_err_names(one.reload(), &depth, "Sixteen");
+}
 
+#[test]
+fn bad_label_png_fails_with_the_file_named() {
+    let one = OneFrame::new("bad-labels");
     // wrong image size
-    let labels = file("semantic_40", "png");
-    let good_labels = std::fs::read(&labels).unwrap();
+    let labels = one.file("semantic_40", "png");
     write_png(&labels, 8, 12, png::BitDepth::Eight, &[1; 8 * 12]);
-    assert_err_names(reload(), &labels, "8x12");
+    assert_err_names(one.reload(), &labels, "8x12");
     // label 41
     let mut l = vec![3u8; 16 * 12];
     l[17] = 41;
     write_png(&labels, 16, 12, png::BitDepth::Eight, &l);
-    assert_err_names(reload(), &labels, "label 41");
-    std::fs::write(&labels, &good_labels).unwrap();
+    assert_err_names(one.reload(), &labels, "label 41");
+}
 
-    // NaN, missing field and a non-unit quaternion in the extrinsics
-    let ext = file("extrinsics", "json");
-    let good_ext = std::fs::read_to_string(&ext).unwrap();
+#[test]
+fn bad_extrinsics_fail_with_the_file_named() {
+    let one = OneFrame::new("bad-extrinsics");
+    // NaN, missing field, non-unit and zero quaternions, an infinite position
+    let ext = one.file("extrinsics", "json");
     for text in [
         r#"{"x": NaN, "y": 0, "z": 0, "quat_x": 0, "quat_y": 0, "quat_z": 0, "quat_w": 1}"#,
         r#"{"x": 0, "y": 0, "z": 0, "quat_x": 0, "quat_y": 0, "quat_z": 0}"#,
@@ -425,29 +473,28 @@ fn bad_inputs_fail_with_the_file_named() {
         r#"{"x": 1e999, "y": 0, "z": 0, "quat_x": 0, "quat_y": 0, "quat_z": 0, "quat_w": 1}"#,
     ] {
         write_text(&ext, text);
-        assert_err_names(reload(), &ext, "");
+        assert_err_names(one.reload(), &ext, "");
     }
-    write_text(&ext, &good_ext);
+}
 
-    // missing prediction of one frame while esanet/ exists
-    let pred = file("esanet", "npy");
+#[test]
+fn missing_prediction_fails_with_the_file_named() {
+    let one = OneFrame::new("bad-prediction");
+    // one frame's prediction missing while esanet/ exists
+    let pred = one.file("esanet", "npy");
     std::fs::remove_file(&pred).unwrap();
-    assert_err_names(reload(), &pred, "");
+    assert_err_names(one.reload(), &pred, "");
+}
 
-    // bad intrinsics
-    let intr = split.join("intrinsics/synth_00_room/cam_00.json");
+#[test]
+fn bad_intrinsics_fail_with_the_file_named() {
+    let one = OneFrame::new("bad-intrinsics");
+    let intr = one.intrinsics();
     write_text(
         &intr,
         r#"{"fx": 0, "fy": 10, "cx": 8, "cy": 6, "width": 16, "height": 12}"#,
     );
-    assert_err_names(reload(), &intr, "");
-
-    // malformed split-list line
-    let list = root.join("test.txt");
-    write_text(&list, "synth_00_room/cam_00/0000\nsynth_00_room/0001\n");
-    assert_err_names(open(&root, false), &list, ":2");
-    write_text(&list, "synth_00_room/cam_00/00x0\n");
-    assert_err_names(open(&root, false), &list, "");
+    assert_err_names(one.reload(), &intr, "");
 
     // a frame whose intrinsics disagree with the camera's file is not written
     let mut other = hand_frame("cam_00", 1, 0);
@@ -459,8 +506,17 @@ fn bad_inputs_fail_with_the_file_named() {
         width: 16,
         height: 12,
     }));
-    assert_err_names(prepared::write_frame(&root, "test", &other), &intr, "");
-    std::fs::remove_dir_all(&root).unwrap();
+    assert_err_names(prepared::write_frame(&one.root, "test", &other), &intr, "");
+}
+
+#[test]
+fn malformed_split_list_fails_with_the_file_named() {
+    let one = OneFrame::new("bad-list");
+    let list = one.root.join("test.txt");
+    write_text(&list, "synth_00_room/cam_00/0000\nsynth_00_room/0001\n");
+    assert_err_names(open(&one.root, false), &list, ":2");
+    write_text(&list, "synth_00_room/cam_00/00x0\n");
+    assert_err_names(open(&one.root, false), &list, "");
 }
 
 /// Parses a binary little-endian PLY of `x y z` floats and `red green blue` uchars.

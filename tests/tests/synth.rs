@@ -12,7 +12,8 @@ use sndt_host::dataset::synthetic::{
 };
 use sndt_host::dataset::OpenOptions;
 use sndt_host::dataset::{Dataset, FrameId};
-use sndt_host::eval::metrics::Confusion;
+use sndt_host::eval::label_stats::LabelStats;
+use std::sync::Mutex;
 
 const SMALL: Pinhole = Pinhole {
     fx: 60.0,
@@ -200,12 +201,11 @@ fn depth_noise_has_the_stated_spread() {
 fn default_split_covers_25_classes_and_prediction_is_calibrated() {
     // Every 10th frame of each trajectory of the default split (60 frames of 1024x768).
     let split = Synthetic::new(SynthOptions::default()).unwrap();
-    let mut hist = [0u64; 41];
-    let mut conf = Confusion::default();
+    let mut stats = LabelStats::default();
     for id in split.frames().iter().filter(|id| id.index % 10 == 0) {
-        let f = split.load(id).unwrap();
-        synthetic::add_stats(&f, &mut hist, &mut conf);
+        stats.add(&split.load(id).unwrap());
     }
+    let (hist, conf) = (&stats.class_pixels, &stats.prediction);
     let present = hist[1..].iter().filter(|&&n| n > 0).count();
     assert!(present >= 25, "{present} classes in view");
     // The classes the paper names as hard are among them.
@@ -272,9 +272,22 @@ fn written_split_reads_back_identically() {
         ..Default::default()
     })
     .unwrap();
-    let summary = synthetic::write_split(&dir, &split, &|| {}).unwrap();
-    assert_eq!(summary.frames, 4);
-    assert_eq!(summary.class_pixels.iter().sum::<u64>(), 4 * 80 * 60);
+    let seen = Mutex::new(Vec::new());
+    let stats = Mutex::new(LabelStats::default());
+    let frames = synthetic::write_split(&dir, &split, &|f| {
+        seen.lock().unwrap().push(f.id.clone());
+        stats.lock().unwrap().add(f);
+    })
+    .unwrap();
+    assert_eq!(frames, 4);
+    // Every frame is handed to the callback exactly once.
+    let mut seen = seen.into_inner().unwrap();
+    seen.sort_by_key(|id| id.to_string());
+    assert_eq!(seen, split.frames());
+    assert_eq!(
+        stats.into_inner().unwrap().class_pixels.iter().sum::<u64>(),
+        4 * 80 * 60
+    );
     let read = dataset::open(&dir, &OpenOptions::default()).unwrap();
     assert_eq!(read.frames(), split.frames());
     for id in split.frames() {

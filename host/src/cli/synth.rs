@@ -4,10 +4,12 @@
 use crate::dataset::classes::{render_color, NYU40};
 use crate::dataset::source::Dataset;
 use crate::dataset::synthetic::{write_split, DepthNoise, SynthOptions, Synthetic};
+use crate::eval::label_stats::LabelStats;
 use crate::output::picture;
 use crate::output::progress::progress;
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 use std::time::Instant;
 
 /// Arguments of `sndt synth`.
@@ -48,13 +50,17 @@ pub fn run(a: &SynthArgs) -> Result<()> {
     let split = Synthetic::new(options)?;
     println!("sndt synth: {} -> {}", split.describe(), a.out.display());
     let bar = progress((a.scenes * a.frames) as u64, "synth");
-    let summary = write_split(&a.out, &split, &|| bar.inc(1))?;
+    // Per-frame statistics are summed outside the lock; only the merge is serialised.
+    let stats = Mutex::new(LabelStats::default());
+    let frames = write_split(&a.out, &split, &|f| {
+        let mut one = LabelStats::default();
+        one.add(f);
+        stats.lock().expect("no panic while merging").merge(&one);
+        bar.inc(1);
+    })?;
+    let summary = stats.into_inner().expect("no panic while merging");
     bar.finish_and_clear();
-    println!(
-        "{} frames in {:.1} s",
-        summary.frames,
-        t.elapsed().as_secs_f64()
-    );
+    println!("{frames} frames in {:.1} s", t.elapsed().as_secs_f64());
     print_class_histogram(&summary.class_pixels);
     write_previews(&split, &a.out.join("preview"))?;
     if !a.no_predictions {

@@ -1,4 +1,4 @@
-//! Raw Hypersim reader (DESIGN.md section 5).
+//! Raw Hypersim reader.
 //!
 //! Layout, as in the raw Hypersim download:
 //! - `<root>/<scene>/_detail/<cam>/camera_keyframe_{orientations,positions}.hdf5`:
@@ -21,7 +21,6 @@
 //! and the keyframe.
 
 use crate::dataset::frame::{Frame, FrameId, Rays};
-
 use crate::dataset::source::Dataset;
 use crate::dataset::source::OpenOptions;
 use anyhow::{anyhow, bail, ensure, Context, Result};
@@ -113,86 +112,9 @@ impl Hypersim {
             bail!("{}: predictions directory not found", p.display());
         }
         let camera_csv = find_camera_csv(root)?;
-        let mut frames = Vec::new();
-        for scene in sorted_dirs(root)? {
-            if !root.join(&scene).join("_detail").is_dir() {
-                continue;
-            }
-            for cam in sorted_dirs(&root.join(&scene).join("_detail"))? {
-                if !cam.starts_with("cam_") {
-                    continue;
-                }
-                for index in depth_indices(&geometry_dir(root, &scene, &cam))? {
-                    frames.push(FrameId {
-                        scene: scene.clone(),
-                        cam: cam.clone(),
-                        index,
-                    });
-                }
-            }
-        }
-        if frames.is_empty() {
-            bail!(
-                "{}: raw Hypersim layout without any <scene>/images/scene_<cam>_geometry_hdf5/frame.NNNN.depth_meters.hdf5",
-                root.display()
-            );
-        }
-
-        let wanted: Vec<&str> = {
-            let mut v: Vec<&str> = frames.iter().map(|f| f.scene.as_str()).collect();
-            v.dedup();
-            v
-        };
-        let mut table = read_camera_csv(&camera_csv)?;
-        let mut scenes = BTreeMap::new();
-        for &name in &wanted {
-            let params = table
-                .remove(name)
-                .ok_or_else(|| anyhow!("{}: no row for scene {name}", camera_csv.display()))?;
-            let scene_csv = root.join(name).join("_detail").join("metadata_scene.csv");
-            let meters_per_asset_unit = if scene_csv.is_file() {
-                read_scene_meters_per_asset_unit(&scene_csv)?
-            } else {
-                params.meters_scale
-            };
-            ensure!(
-                meters_per_asset_unit.is_finite() && meters_per_asset_unit > 0.0,
-                "{}: scene {name}: meters per asset unit {meters_per_asset_unit} is not positive",
-                camera_csv.display()
-            );
-            check_rays(&params)
-                .with_context(|| format!("{}: scene {name}", camera_csv.display()))?;
-            scenes.insert(
-                name.to_string(),
-                Scene {
-                    params,
-                    meters_per_asset_unit,
-                },
-            );
-        }
-
-        let mut trajectories = BTreeMap::new();
-        for id in &frames {
-            let key = (id.scene.clone(), id.cam.clone());
-            if trajectories.contains_key(&key) {
-                continue;
-            }
-            let dir = root.join(&id.scene).join("_detail").join(&id.cam);
-            let poses = read_keyframe_poses(&dir, scenes[&id.scene].meters_per_asset_unit)?;
-            trajectories.insert(key, poses);
-        }
-        for id in &frames {
-            let n = trajectories[&(id.scene.clone(), id.cam.clone())]
-                .poses
-                .len();
-            if id.index as usize >= n {
-                bail!(
-                    "{}: frame {} has a depth file but the trajectory has only {n} keyframes",
-                    orientations_path(root, &id.scene, &id.cam).display(),
-                    id.index
-                );
-            }
-        }
+        let frames = find_frames(root)?;
+        let scenes = read_scenes(root, &camera_csv, &frames)?;
+        let trajectories = read_trajectories(root, &frames, &scenes)?;
         Ok(Hypersim {
             root: root.to_path_buf(),
             frames,
@@ -380,6 +302,107 @@ fn depth_indices(dir: &Path) -> Result<Vec<u32>> {
     }
     out.sort_unstable();
     Ok(out)
+}
+
+/// The frames of a raw Hypersim tree: every depth file of every `cam_*` of every scene
+/// with a `_detail` folder, ordered by scene, camera and index.
+fn find_frames(root: &Path) -> Result<Vec<FrameId>> {
+    let mut frames = Vec::new();
+    for scene in sorted_dirs(root)? {
+        if !root.join(&scene).join("_detail").is_dir() {
+            continue;
+        }
+        for cam in sorted_dirs(&root.join(&scene).join("_detail"))? {
+            if !cam.starts_with("cam_") {
+                continue;
+            }
+            for index in depth_indices(&geometry_dir(root, &scene, &cam))? {
+                frames.push(FrameId {
+                    scene: scene.clone(),
+                    cam: cam.clone(),
+                    index,
+                });
+            }
+        }
+    }
+    if frames.is_empty() {
+        bail!(
+            "{}: raw Hypersim layout without any <scene>/images/scene_<cam>_geometry_hdf5/frame.NNNN.depth_meters.hdf5",
+            root.display()
+        );
+    }
+    Ok(frames)
+}
+
+/// The camera parameters and scale of every scene that has frames, checked: a missing CSV
+/// row, a scale that is not positive or unusable rays are errors naming the CSV.
+fn read_scenes(
+    root: &Path,
+    camera_csv: &Path,
+    frames: &[FrameId],
+) -> Result<BTreeMap<String, Scene>> {
+    // `frames` is ordered by scene, so this lists each scene once.
+    let mut wanted: Vec<&str> = frames.iter().map(|f| f.scene.as_str()).collect();
+    wanted.dedup();
+    let mut table = read_camera_csv(camera_csv)?;
+    let mut scenes = BTreeMap::new();
+    for &name in &wanted {
+        let params = table
+            .remove(name)
+            .ok_or_else(|| anyhow!("{}: no row for scene {name}", camera_csv.display()))?;
+        let scene_csv = root.join(name).join("_detail").join("metadata_scene.csv");
+        let meters_per_asset_unit = if scene_csv.is_file() {
+            read_scene_meters_per_asset_unit(&scene_csv)?
+        } else {
+            params.meters_scale
+        };
+        ensure!(
+            meters_per_asset_unit.is_finite() && meters_per_asset_unit > 0.0,
+            "{}: scene {name}: meters per asset unit {meters_per_asset_unit} is not positive",
+            camera_csv.display()
+        );
+        check_rays(&params).with_context(|| format!("{}: scene {name}", camera_csv.display()))?;
+        scenes.insert(
+            name.to_string(),
+            Scene {
+                params,
+                meters_per_asset_unit,
+            },
+        );
+    }
+    Ok(scenes)
+}
+
+/// The checked keyframe poses of every trajectory that has frames; a depth file beyond
+/// the last keyframe is an error naming the orientations file.
+fn read_trajectories(
+    root: &Path,
+    frames: &[FrameId],
+    scenes: &BTreeMap<String, Scene>,
+) -> Result<BTreeMap<(String, String), KeyframePoses>> {
+    let mut trajectories = BTreeMap::new();
+    for id in frames {
+        let key = (id.scene.clone(), id.cam.clone());
+        if trajectories.contains_key(&key) {
+            continue;
+        }
+        let dir = root.join(&id.scene).join("_detail").join(&id.cam);
+        let poses = read_keyframe_poses(&dir, scenes[&id.scene].meters_per_asset_unit)?;
+        trajectories.insert(key, poses);
+    }
+    for id in frames {
+        let n = trajectories[&(id.scene.clone(), id.cam.clone())]
+            .poses
+            .len();
+        if id.index as usize >= n {
+            bail!(
+                "{}: frame {} has a depth file but the trajectory has only {n} keyframes",
+                orientations_path(root, &id.scene, &id.cam).display(),
+                id.index
+            );
+        }
+    }
+    Ok(trajectories)
 }
 
 /// `<root>/metadata_camera_parameters.csv`, else the same in `root`'s parent.

@@ -318,25 +318,78 @@ impl TestVector {
 
     /// Parses and checks a vector (sizes, capacities, pose validity, labels).
     pub fn parse(bytes: &[u8]) -> Result<TestVector> {
+        let header = Header::parse(bytes)?;
+        let n = header.camera.width as usize * header.camera.height as usize;
+        let frame_bytes = POSE_BYTES + 5 * n;
+        let want = HEADER_BYTES + PROBE_BYTES * header.probes + header.frames * frame_bytes;
+        ensure!(
+            bytes.len() == want,
+            "test vector: {} bytes, its header says {want}",
+            bytes.len()
+        );
+        let le = LittleEndian(bytes);
+        let probes = (0..header.probes)
+            .map(|p| header.parse_probe(le, HEADER_BYTES + PROBE_BYTES * p))
+            .collect::<Result<Vec<_>>>()?;
+        let first_frame = HEADER_BYTES + PROBE_BYTES * header.probes;
+        let frames = (0..header.frames)
+            .map(|k| parse_frame(le, first_frame + k * frame_bytes, n, k))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(TestVector {
+            camera: header.camera,
+            config: header.config,
+            probes,
+            frames,
+        })
+    }
+}
+
+/// Little-endian numbers at byte offsets of a buffer whose length has been checked.
+#[derive(Clone, Copy)]
+struct LittleEndian<'a>(&'a [u8]);
+
+impl LittleEndian<'_> {
+    fn u16_at(self, o: usize) -> u16 {
+        u16::from_le_bytes([self.0[o], self.0[o + 1]])
+    }
+
+    fn u32_at(self, o: usize) -> u32 {
+        u32::from_le_bytes(self.0[o..o + 4].try_into().unwrap())
+    }
+
+    fn f32_at(self, o: usize) -> f32 {
+        f32::from_bits(self.u32_at(o))
+    }
+}
+
+/// The fixed-size header of a vector, checked against this build's map and for a usable
+/// camera and cell size.
+struct Header {
+    frames: usize,
+    probes: usize,
+    camera: Pinhole,
+    config: Config,
+}
+
+impl Header {
+    fn parse(bytes: &[u8]) -> Result<Header> {
         ensure!(
             bytes.len() >= HEADER_BYTES,
             "test vector: {} bytes, shorter than its header",
             bytes.len()
         );
         ensure!(bytes[..8] == MAGIC, "test vector: bad magic");
-        let u16_at = |o: usize| u16::from_le_bytes([bytes[o], bytes[o + 1]]);
-        let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap());
-        let f32_at = |o: usize| f32::from_bits(u32_at(o));
+        let le = LittleEndian(bytes);
         ensure!(
-            u16_at(8) == VERSION,
+            le.u16_at(8) == VERSION,
             "test vector: version {}, expected {VERSION}",
-            u16_at(8)
+            le.u16_at(8)
         );
-        let (frames, probes) = (u16_at(10) as usize, u16_at(12) as usize);
+        let (frames, probes) = (le.u16_at(10) as usize, le.u16_at(12) as usize);
         let caps = (
-            u16_at(14) as usize,
-            u32_at(16) as usize,
-            u32_at(20) as usize,
+            le.u16_at(14) as usize,
+            le.u32_at(16) as usize,
+            le.u32_at(20) as usize,
         );
         ensure!(
             caps == (CLASSES, VOXELS, BLOCKS),
@@ -346,12 +399,12 @@ impl TestVector {
             caps.0
         );
         let camera = Pinhole {
-            width: u32_at(24),
-            height: u32_at(28),
-            fx: f32_at(32),
-            fy: f32_at(36),
-            cx: f32_at(40),
-            cy: f32_at(44),
+            width: le.u32_at(24),
+            height: le.u32_at(28),
+            fx: le.f32_at(32),
+            fy: le.f32_at(36),
+            cx: le.f32_at(40),
+            cy: le.f32_at(44),
         };
         let n = camera.width as usize * camera.height as usize;
         ensure!(
@@ -365,59 +418,51 @@ impl TestVector {
                 && camera.fy > 0.0,
             "test vector: bad camera {camera:?}"
         );
-        let config = Config::with_cell_size(f32_at(48));
+        let config = Config::with_cell_size(le.f32_at(48));
         config
             .validate()
             .map_err(|_| anyhow::anyhow!("test vector: bad cell size {}", config.cell_size))?;
-        let frame_bytes = POSE_BYTES + 5 * n;
-        let want = HEADER_BYTES + PROBE_BYTES * probes + frames * frame_bytes;
-        ensure!(
-            bytes.len() == want,
-            "test vector: {} bytes, its header says {want}",
-            bytes.len()
-        );
-        let mut o = HEADER_BYTES;
-        let mut probe_list = Vec::with_capacity(probes);
-        for _ in 0..probes {
-            let p = (u16_at(o), u16_at(o + 2), u16_at(o + 4));
-            ensure!(
-                (p.0 as usize) < frames
-                    && (p.1 as u32) < camera.width
-                    && (p.2 as u32) < camera.height,
-                "test vector: probe {p:?} outside the frames"
-            );
-            probe_list.push(p);
-            o += PROBE_BYTES;
-        }
-        let mut out = Vec::with_capacity(frames);
-        for k in 0..frames {
-            let rotation: [f32; 9] = std::array::from_fn(|i| f32_at(o + 4 * i));
-            let translation: [f32; 3] = std::array::from_fn(|i| f32_at(o + 36 + 4 * i));
-            o += POSE_BYTES;
-            let depth = (0..n).map(|i| f32_at(o + 4 * i)).collect();
-            o += 4 * n;
-            let labels = bytes[o..o + n].to_vec();
-            o += n;
-            if let Some(bad) = labels.iter().find(|&&l| l as usize > CLASSES) {
-                bail!("test vector: frame {k}: label {bad} above {CLASSES}");
-            }
-            let f = VectorFrame {
-                rotation,
-                translation,
-                depth,
-                labels,
-            };
-            f.pose()
-                .with_context(|| format!("test vector: frame {k}"))?;
-            out.push(f);
-        }
-        Ok(TestVector {
+        Ok(Header {
+            frames,
+            probes,
             camera,
             config,
-            probes: probe_list,
-            frames: out,
         })
     }
+
+    /// The probe record at byte `o`: `(frame, col, row)`, which must lie in the frames.
+    fn parse_probe(&self, le: LittleEndian, o: usize) -> Result<(u16, u16, u16)> {
+        let p = (le.u16_at(o), le.u16_at(o + 2), le.u16_at(o + 4));
+        ensure!(
+            (p.0 as usize) < self.frames
+                && (p.1 as u32) < self.camera.width
+                && (p.2 as u32) < self.camera.height,
+            "test vector: probe {p:?} outside the frames"
+        );
+        Ok(p)
+    }
+}
+
+/// Frame `k` of `n` pixels at byte `o`, with its labels and pose checked.
+fn parse_frame(le: LittleEndian, o: usize, n: usize, k: usize) -> Result<VectorFrame> {
+    let rotation: [f32; 9] = std::array::from_fn(|i| le.f32_at(o + 4 * i));
+    let translation: [f32; 3] = std::array::from_fn(|i| le.f32_at(o + 36 + 4 * i));
+    let depth_at = o + POSE_BYTES;
+    let depth = (0..n).map(|i| le.f32_at(depth_at + 4 * i)).collect();
+    let labels_at = depth_at + 4 * n;
+    let labels = le.0[labels_at..labels_at + n].to_vec();
+    if let Some(bad) = labels.iter().find(|&&l| l as usize > CLASSES) {
+        bail!("test vector: frame {k}: label {bad} above {CLASSES}");
+    }
+    let f = VectorFrame {
+        rotation,
+        translation,
+        depth,
+        labels,
+    };
+    f.pose()
+        .with_context(|| format!("test vector: frame {k}"))?;
+    Ok(f)
 }
 
 /// A probe's outcome: the pixel's ground truth and what the map's ray cast found.
@@ -619,6 +664,34 @@ mod tests {
         bad = bytes.clone();
         bad[0] ^= 1;
         assert!(TestVector::parse(&bad).is_err());
+    }
+
+    #[test]
+    fn parse_names_what_is_wrong() {
+        let bytes = generate().to_bytes();
+        let error = |edit: &dyn Fn(&mut Vec<u8>)| {
+            let mut bad = bytes.clone();
+            edit(&mut bad);
+            format!("{:#}", TestVector::parse(&bad).unwrap_err())
+        };
+        assert!(error(&|b| b.truncate(10)).contains("shorter than its header"));
+        assert!(error(&|b| b[8] = 2).contains("version 2"));
+        assert!(error(&|b| b[14] = 41).contains("Map<4096, 512, 41>"));
+        assert!(
+            error(&|b| b[32..36].copy_from_slice(&(-1.0f32).to_le_bytes())).contains("bad camera")
+        );
+        assert!(
+            error(&|b| b[48..52].copy_from_slice(&0.0f32.to_le_bytes())).contains("bad cell size")
+        );
+        // The first probe's frame index, then the last frame's last label.
+        assert!(error(&|b| b[HEADER_BYTES] = 9).contains("probe (9, "));
+        assert!(error(&|b| *b.last_mut().unwrap() = 41).contains("frame 3: label 41"));
+        // The last frame's first rotation entry.
+        let rotation = bytes.len() - (POSE_BYTES + 5 * 160 * 120);
+        assert!(
+            error(&|b| b[rotation..rotation + 4].copy_from_slice(&f32::NAN.to_le_bytes()))
+                .contains("frame 3")
+        );
     }
 
     #[test]

@@ -10,4 +10,5 @@
 pub mod compare;
 pub mod evaluate;
 pub mod experiment;
+pub mod label_stats;
 pub mod metrics;

@@ -9,7 +9,7 @@
 //! - [`DepthNoise`]: an optional range-dependent depth-noise model;
 //! - [`predict`]: a segmentation-network model producing ESANet-style top-3 predictions;
 //! - [`Synthetic`]: the split as a [`Dataset`] rendered on demand, and [`write_split`]
-//!   writing it in the prepared layout (DESIGN.md section 5).
+//!   writing it in the prepared layout that [`crate::dataset::prepared`] reads.
 
 pub mod geometry;
 pub mod predict;
@@ -17,9 +17,7 @@ pub mod room;
 pub mod scenes;
 
 use crate::dataset::frame::{Frame, FrameId, Rays};
-
 use crate::dataset::source::Dataset;
-use crate::eval::metrics::Confusion;
 use anyhow::{bail, Result};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -399,64 +397,32 @@ impl Dataset for Synthetic {
     }
 }
 
-/// What [`write_split`] produced.
-#[derive(Clone, Debug)]
-pub struct SplitSummary {
-    /// Frames written.
-    pub frames: usize,
-    /// Ground-truth pixels per class (index 0 = void).
-    pub class_pixels: [u64; 41],
-    /// Raw top-1 prediction against the ground truth (DESIGN.md section 4).
-    pub prediction: Confusion,
-}
-
 /// Generates the split and writes it in the prepared layout under `root` (split `test`,
-/// plus intrinsics and ESANet-style `.npy` predictions); frames in parallel.
-/// `progress` is called once per frame written.
+/// plus intrinsics and ESANet-style `.npy` predictions); frames in parallel. Returns the
+/// number of frames written.
+///
+/// `on_frame` sees every frame once it is on disk, from the worker threads and in no
+/// particular order: the caller counts classes or advances a progress bar there without
+/// rendering the split a second time.
 pub fn write_split(
     root: &Path,
     split: &Synthetic,
-    progress: &(dyn Fn() + Sync),
-) -> Result<SplitSummary> {
+    on_frame: &(dyn Fn(&Frame) + Sync),
+) -> Result<usize> {
     let ids = split.frames().to_vec();
-    let parts: Vec<Result<([u64; 41], Confusion)>> = ids
+    // Every chunk runs to its end even if another fails, then the first error is reported.
+    let written: Vec<Result<()>> = ids
         .par_chunks(8)
         .map(|chunk| {
-            let mut hist = [0u64; 41];
-            let mut conf = Confusion::default();
             for id in chunk {
                 let f = split.load(id)?;
                 crate::dataset::prepared::write_frame(root, "test", &f)?;
-                add_stats(&f, &mut hist, &mut conf);
-                progress();
+                on_frame(&f);
             }
-            Ok((hist, conf))
+            Ok(())
         })
         .collect();
-    let mut summary = SplitSummary {
-        frames: ids.len(),
-        class_pixels: [0; 41],
-        prediction: Confusion::default(),
-    };
-    for p in parts {
-        let (hist, conf) = p?;
-        for (total, n) in summary.class_pixels.iter_mut().zip(hist) {
-            *total += n;
-        }
-        summary.prediction.merge(&conf);
-    }
+    written.into_iter().collect::<Result<()>>()?;
     crate::dataset::prepared::write_split_list(root, "test", &ids)?;
-    Ok(summary)
-}
-
-/// Adds a frame's class histogram and its raw-prediction confusion.
-pub fn add_stats(f: &Frame, hist: &mut [u64; 41], conf: &mut Confusion) {
-    if let Some(l) = &f.labels {
-        for &c in l {
-            hist[c as usize] += 1;
-        }
-        if let Some(p) = &f.predictions {
-            conf.add_frame(l, &p.top1(), &f.planar_depth_image());
-        }
-    }
+    Ok(ids.len())
 }

@@ -14,8 +14,8 @@
 //!   often second when the first is wrong.
 //!
 //! Calibrated (see [`ModelParams::DEFAULT`]) so that the raw top-1 prediction scores
-//! 38-45 % mIoU against the ground truth on the default synthetic split with the
-//! evaluation of DESIGN.md section 4 (the paper's ESANet: 41.17 %).
+//! 38-45 % mIoU against the ground truth on the default synthetic split with the paper's
+//! evaluation (the paper's ESANet: 41.17 %).
 
 use super::scenes::class::*;
 use crate::dataset::frame::TopK;
@@ -119,6 +119,7 @@ fn pick(rng: &mut ChaCha8Rng, xs: &[u8]) -> u8 {
     xs[rng.random_range(0..xs.len())]
 }
 
+/// Where one object (an instance with one label) lies in the frame.
 #[derive(Clone, Copy)]
 struct Stats {
     count: u32,
@@ -126,6 +127,7 @@ struct Stats {
     sum: [f64; 2],
 }
 
+/// What the network makes of one object.
 #[derive(Clone, Copy)]
 enum Fate {
     Keep,
@@ -162,10 +164,30 @@ pub fn predict(
     params: &ModelParams,
 ) -> TopK {
     let (w, h) = (width as usize, height as usize);
-    let n = w * h;
+    // Pixel counts and blob sizes are tuned for 1024x768 and scale with the image.
+    let scale = ((w * h) as f32 / (1024.0 * 768.0)).max(1e-3);
+    let objects = objects_in_view(labels, instances, w);
+    let epoch = frame / params.period.max(1);
+    let fates: HashMap<(u16, u8), Fate> = objects
+        .iter()
+        .map(|(&(inst, l), s)| {
+            let mut rng = object_rng(key, inst, epoch, l);
+            let fate = object_fate(&mut rng, l, s, labels, w, h, scale, params);
+            ((inst, l), fate)
+        })
+        .collect();
+    let mut relabelled = apply_fates(labels, instances, w, &fates);
+    // One generator for everything that changes every frame, drawn in this order:
+    // blobs, then the displacement field, then the scores.
     let mut frame_rng = ChaCha8Rng::seed_from_u64(frame_seed);
+    add_spurious_blobs(&mut relabelled, w, h, scale, params, &mut frame_rng);
+    let pred = warp_boundaries(&relabelled, w, h, params, &mut frame_rng);
+    top3(&pred, labels, &mut frame_rng)
+}
 
-    // 1. Objects in view.
+/// Each object in view (instance and label) with its pixel count, bounding box and
+/// centroid sums.
+fn objects_in_view(labels: &[u8], instances: &[u16], w: usize) -> HashMap<(u16, u8), Stats> {
     let mut stats: HashMap<(u16, u8), Stats> = HashMap::new();
     for (i, (&l, &inst)) in labels.iter().zip(instances).enumerate() {
         let (x, y) = ((i % w) as u32, (i / w) as u32);
@@ -184,46 +206,70 @@ pub fn predict(
         s.sum[0] += x as f64;
         s.sum[1] += y as f64;
     }
+    stats
+}
 
-    // 2. Each object's fate, stable over `period` frames.
-    let scale = (n as f32 / (1024.0 * 768.0)).max(1e-3);
-    let epoch = frame / params.period.max(1);
-    let mut fate: HashMap<(u16, u8), Fate> = HashMap::new();
-    for (&(inst, l), s) in &stats {
-        let mut rng = ChaCha8Rng::seed_from_u64(
-            key ^ (inst as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
-                ^ (epoch as u64).wrapping_mul(0xD1B5_4A32_D192_ED69)
-                ^ l as u64,
-        );
-        let f = if l == VOID {
-            // The network never says void: unlabelled things get a plausible class.
-            Fate::Whole(pick(&mut rng, similar(VOID)))
-        } else if difficulty(l) == 2
-            && (s.count as f32) < params.small_pixels as f32 * scale
-            && rng.random::<f32>() < params.absorb
-        {
-            Fate::Whole(surrounding(labels, w, h, &s.bbox, l).unwrap_or(l))
-        } else if rng.random::<f32>() < params.confuse[difficulty(l)] {
-            let to = pick(&mut rng, similar(l));
-            if rng.random::<f32>() < params.whole {
-                Fate::Whole(to)
-            } else {
-                let c = [
-                    (s.sum[0] / s.count as f64) as f32,
-                    (s.sum[1] / s.count as f64) as f32,
-                ];
-                let a = rng.random_range(0.0..std::f32::consts::TAU);
-                Fate::Part(to, c, [a.cos(), a.sin()])
-            }
+/// The generator of one object's decisions: seeded by the object and the epoch only, so
+/// the object keeps its fate for `period` frames whatever else is in view.
+fn object_rng(key: u64, inst: u16, epoch: u32, label: u8) -> ChaCha8Rng {
+    ChaCha8Rng::seed_from_u64(
+        key ^ (inst as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            ^ (epoch as u64).wrapping_mul(0xD1B5_4A32_D192_ED69)
+            ^ label as u64,
+    )
+}
+
+/// Decides what the network makes of an object with label `l`: a plausible class for void,
+/// small hard objects absorbed by their surroundings, similar-class confusion of the whole
+/// object or of one side of it, or nothing.
+#[allow(clippy::too_many_arguments)]
+fn object_fate(
+    rng: &mut ChaCha8Rng,
+    l: u8,
+    s: &Stats,
+    labels: &[u8],
+    w: usize,
+    h: usize,
+    scale: f32,
+    params: &ModelParams,
+) -> Fate {
+    if l == VOID {
+        // The network never says void: unlabelled things get a plausible class.
+        Fate::Whole(pick(rng, similar(VOID)))
+    } else if difficulty(l) == 2
+        && (s.count as f32) < params.small_pixels as f32 * scale
+        && rng.random::<f32>() < params.absorb
+    {
+        Fate::Whole(surrounding(labels, w, h, &s.bbox, l).unwrap_or(l))
+    } else if rng.random::<f32>() < params.confuse[difficulty(l)] {
+        let to = pick(rng, similar(l));
+        if rng.random::<f32>() < params.whole {
+            Fate::Whole(to)
         } else {
-            Fate::Keep
-        };
-        fate.insert((inst, l), f);
+            let c = [
+                (s.sum[0] / s.count as f64) as f32,
+                (s.sum[1] / s.count as f64) as f32,
+            ];
+            let a = rng.random_range(0.0..std::f32::consts::TAU);
+            Fate::Part(to, c, [a.cos(), a.sin()])
+        }
+    } else {
+        Fate::Keep
     }
-    let mut relabelled = vec![0u8; n];
-    for i in 0..n {
+}
+
+/// The label image with every object's fate applied; whatever is still void becomes
+/// "other prop".
+fn apply_fates(
+    labels: &[u8],
+    instances: &[u16],
+    w: usize,
+    fates: &HashMap<(u16, u8), Fate>,
+) -> Vec<u8> {
+    let mut relabelled = vec![0u8; labels.len()];
+    for i in 0..labels.len() {
         let l = labels[i];
-        relabelled[i] = match fate.get(&(instances[i], l)).copied().unwrap_or(Fate::Keep) {
+        relabelled[i] = match fates.get(&(instances[i], l)).copied().unwrap_or(Fate::Keep) {
             Fate::Keep => l,
             Fate::Whole(c) => c,
             Fate::Part(c, o, d) => {
@@ -239,21 +285,28 @@ pub fn predict(
             relabelled[i] = OTHER_PROP;
         }
     }
+    relabelled
+}
 
-    // 3. Spurious blobs of a class similar to what lies under them (before the warp,
-    // which makes their outlines irregular).
-    let blobs = poisson(&mut frame_rng, params.blobs);
+/// Paints elliptic blobs of a class similar to what lies under them. Done before the warp,
+/// which makes their outlines irregular.
+fn add_spurious_blobs(
+    relabelled: &mut [u8],
+    w: usize,
+    h: usize,
+    scale: f32,
+    params: &ModelParams,
+    rng: &mut ChaCha8Rng,
+) {
+    let blobs = poisson(rng, params.blobs);
     for _ in 0..blobs {
-        let (cx, cy) = (
-            frame_rng.random_range(0..w) as f32,
-            frame_rng.random_range(0..h) as f32,
-        );
+        let (cx, cy) = (rng.random_range(0..w) as f32, rng.random_range(0..h) as f32);
         let (rx, ry) = (
-            frame_rng.random_range(10.0..60.0) * scale.sqrt(),
-            frame_rng.random_range(10.0..60.0) * scale.sqrt(),
+            rng.random_range(10.0..60.0) * scale.sqrt(),
+            rng.random_range(10.0..60.0) * scale.sqrt(),
         );
         let under = relabelled[cy as usize * w + cx as usize];
-        let class = pick(&mut frame_rng, similar(under));
+        let class = pick(rng, similar(under));
         let (x0, x1) = ((cx - rx).max(0.0) as usize, ((cx + rx) as usize).min(w - 1));
         let (y0, y1) = ((cy - ry).max(0.0) as usize, ((cy + ry) as usize).min(h - 1));
         for y in y0..=y1 {
@@ -265,19 +318,28 @@ pub fn predict(
             }
         }
     }
+}
 
-    // 4. Boundary errors: sample through a smooth displacement field.
+/// Boundary errors: every pixel takes the label a smooth random displacement away
+/// (bilinear in a coarse grid of random offsets), so edges wobble by a few pixels.
+fn warp_boundaries(
+    relabelled: &[u8],
+    w: usize,
+    h: usize,
+    params: &ModelParams,
+    rng: &mut ChaCha8Rng,
+) -> Vec<u8> {
     let g = params.warp_grid.max(2) as usize;
     let (gw, gh) = (w / g + 2, h / g + 2);
     let field: Vec<[f32; 2]> = (0..gw * gh)
         .map(|_| {
             [
-                frame_rng.random_range(-1.0f32..1.0) * params.warp,
-                frame_rng.random_range(-1.0f32..1.0) * params.warp,
+                rng.random_range(-1.0f32..1.0) * params.warp,
+                rng.random_range(-1.0f32..1.0) * params.warp,
             ]
         })
         .collect();
-    let mut pred = vec![0u8; n];
+    let mut pred = vec![0u8; w * h];
     for y in 0..h {
         let fy = y as f32 / g as f32;
         let (y0, ty) = (fy as usize, fy.fract());
@@ -295,54 +357,63 @@ pub fn predict(
             pred[y * w + x] = relabelled[sy * w + sx];
         }
     }
+    pred
+}
 
-    // 5. Top-3 with scores.
+/// Top-3 classes and scores for every pixel whose top-1 is `pred`.
+fn top3(pred: &[u8], labels: &[u8], rng: &mut ChaCha8Rng) -> TopK {
     let mut out = TopK {
-        classes: Vec::with_capacity(n),
-        scores: Vec::with_capacity(n),
+        classes: Vec::with_capacity(pred.len()),
+        scores: Vec::with_capacity(pred.len()),
     };
-    for i in 0..n {
-        let c1 = pred[i];
-        let truth = labels[i];
-        let right = c1 == truth;
-        let s1 = if right {
-            frame_rng.random_range(0.55f32..0.98)
-        } else {
-            frame_rng.random_range(0.3f32..0.75)
-        };
-        let alt = similar(c1);
-        let c2 = if !right && truth != VOID && frame_rng.random::<f32>() < 0.5 {
-            truth
-        } else {
-            pick(&mut frame_rng, alt)
-        };
-        let mut c3 = pick(&mut frame_rng, similar(c2));
-        if c3 == c1 || c3 == c2 {
-            c3 = if c1 != OTHER_PROP && c2 != OTHER_PROP {
-                OTHER_PROP
-            } else {
-                WALL
-            };
-        }
-        let c2 = if c2 == c1 {
-            if c1 != WALL {
-                WALL
-            } else {
-                OTHER_PROP
-            }
-        } else {
-            c2
-        };
-        if c3 == c2 || c3 == c1 {
-            c3 = CEILING;
-        }
-        let rest = 1.0 - s1;
-        let s2 = frame_rng.random_range(0.4f32..0.8) * rest.min(s1);
-        let s3 = frame_rng.random_range(0.1f32..0.9) * (rest - s2).min(s2);
-        out.classes.push([c1, c2, c3]);
-        out.scores.push([s1, s2, s3]);
+    for (&c1, &truth) in pred.iter().zip(labels) {
+        let (classes, scores) = top3_at(c1, truth, rng);
+        out.classes.push(classes);
+        out.scores.push(scores);
     }
     out
+}
+
+/// One pixel's top-3: confident where right, less so where wrong, with the true class
+/// second half of the time when the first is wrong; three distinct classes, scores sorted
+/// and summing to at most 1.
+fn top3_at(c1: u8, truth: u8, rng: &mut ChaCha8Rng) -> ([u8; 3], [f32; 3]) {
+    let right = c1 == truth;
+    let s1 = if right {
+        rng.random_range(0.55f32..0.98)
+    } else {
+        rng.random_range(0.3f32..0.75)
+    };
+    let alt = similar(c1);
+    let c2 = if !right && truth != VOID && rng.random::<f32>() < 0.5 {
+        truth
+    } else {
+        pick(rng, alt)
+    };
+    let mut c3 = pick(rng, similar(c2));
+    if c3 == c1 || c3 == c2 {
+        c3 = if c1 != OTHER_PROP && c2 != OTHER_PROP {
+            OTHER_PROP
+        } else {
+            WALL
+        };
+    }
+    let c2 = if c2 == c1 {
+        if c1 != WALL {
+            WALL
+        } else {
+            OTHER_PROP
+        }
+    } else {
+        c2
+    };
+    if c3 == c2 || c3 == c1 {
+        c3 = CEILING;
+    }
+    let rest = 1.0 - s1;
+    let s2 = rng.random_range(0.4f32..0.8) * rest.min(s1);
+    let s3 = rng.random_range(0.1f32..0.9) * (rest - s2).min(s2);
+    ([c1, c2, c3], [s1, s2, s3])
 }
 
 /// The most common label just outside a bounding box (other than `own`).
