@@ -87,7 +87,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         ];
         let e = [end.x as i32, end.y as i32, end.z as i32];
         traverse(o, target, start, e, include_end, |k| {
-            self.miss(f, cache, &ray, &k)
+            self.miss(f, cache, &ray, &k);
         });
     }
 

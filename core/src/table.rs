@@ -44,7 +44,7 @@ impl<T: Entry, const N: usize> Table<T, N> {
             assert!(
                 N >= 1 && N < u32::MAX as usize,
                 "capacity must be in 1..u32::MAX"
-            )
+            );
         };
         Table {
             slots: [T::EMPTY; N],

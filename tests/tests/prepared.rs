@@ -273,7 +273,7 @@ fn nominal_intrinsics_and_paper_fy() {
 
 /// A version-1.0 `.npy` file of float32 values, written by hand.
 fn npy_bytes(descr: &str, fortran: bool, shape: &[usize], values: &[f32]) -> Vec<u8> {
-    let dims: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
+    let dims: Vec<String> = shape.iter().map(std::string::ToString::to_string).collect();
     let mut header = format!(
         "{{'descr': '{descr}', 'fortran_order': {}, 'shape': ({}), }}",
         if fortran { "True" } else { "False" },

@@ -282,7 +282,7 @@ fn written_split_reads_back_identically() {
     assert_eq!(frames, 4);
     // Every frame is handed to the callback exactly once.
     let mut seen = seen.into_inner().unwrap();
-    seen.sort_by_key(|id| id.to_string());
+    seen.sort_by_key(std::string::ToString::to_string);
     assert_eq!(seen, split.frames());
     assert_eq!(
         stats.into_inner().unwrap().class_pixels.iter().sum::<u64>(),

@@ -205,7 +205,11 @@ fn write_frame_pictures(split: &Every, keep: &[FrameId], runs: &Runs, a: &DemoAr
         let f = split.load(id)?;
         let (w, h) = (f.rays.width(), f.rays.height());
         let gt = f.labels.clone().unwrap_or_default();
-        let net = f.predictions.as_ref().map(|p| p.top1()).unwrap_or_default();
+        let net = f
+            .predictions
+            .as_ref()
+            .map(super::super::dataset::frame::TopK::top1)
+            .unwrap_or_default();
         let find = |e: &Evaluation| e.kept.iter().find(|(k, _)| k == id).map(|(_, v)| v.clone());
         let (Some(bg), Some(bp)) = (find(&runs.gt), find(&runs.pred)) else {
             continue;

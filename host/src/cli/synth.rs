@@ -104,7 +104,7 @@ fn write_previews(split: &Synthetic, dir: &Path) -> Result<()> {
             let pred = f
                 .predictions
                 .as_ref()
-                .map(|p| p.top1())
+                .map(super::super::dataset::frame::TopK::top1)
                 .unwrap_or_else(|| gt.clone());
             let path = dir.join(format!("{}_{}.png", id.scene, id.stem()));
             picture::side_by_side(

@@ -157,7 +157,10 @@ impl Hypersim {
         let params = self
             .camera(scene)
             .ok_or_else(|| anyhow!("scene {scene} not in {}", self.root.display()))?;
-        let mut cache = self.rays.lock().unwrap_or_else(|e| e.into_inner());
+        let mut cache = self
+            .rays
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         if let Some(rays) = cache.get(scene).and_then(Weak::upgrade) {
             return Ok(rays);
         }

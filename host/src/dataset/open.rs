@@ -41,7 +41,7 @@ pub fn open(root: &Path, options: &OpenOptions) -> Result<Box<dyn Dataset>> {
     }
     let raw = std::fs::read_dir(root)
         .with_context(|| format!("listing {}", root.display()))?
-        .filter_map(|e| e.ok())
+        .filter_map(std::result::Result::ok)
         .any(|e| e.path().join("_detail").is_dir());
     if raw {
         return Ok(Box::new(super::hypersim::Hypersim::open(root, options)?));

@@ -594,16 +594,16 @@ impl Builder {
                         [x + w.min(0.25), y + d.min(0.2), z + h],
                         BOOKS,
                         id,
-                    )
+                    );
                 }
                 2 => {
                     let h = self.r(0.1, 0.3);
-                    self.lbox(pl, [x, y, z], [x + w, y + d, z + h], BOX, id)
+                    self.lbox(pl, [x, y, z], [x + w, y + d, z + h], BOX, id);
                 }
                 3 => {
                     let h = self.r(0.1, 0.35);
                     let r = self.r(0.03, 0.08);
-                    self.lcyl(pl, x + 0.06, y + 0.06, r, z, z + h, OTHER_PROP, id)
+                    self.lcyl(pl, x + 0.06, y + 0.06, r, z, z + h, OTHER_PROP, id);
                 }
                 4 => self.table_lamp(pl, x + 0.1, y + 0.1, z),
                 _ => self.lbox(pl, [x, y, z], [x + w, y + d, z + 0.03], OTHER_PROP, id),
@@ -889,7 +889,7 @@ impl Builder {
             match self.rng.random_range(0..4) {
                 0 => {
                     let h = self.r(0.2, 0.5);
-                    self.lbox(&pl, [0.0, 0.0, 0.0], [w, d, h], BOX, id)
+                    self.lbox(&pl, [0.0, 0.0, 0.0], [w, d, h], BOX, id);
                 }
                 1 => self.lbox(&pl, [0.0, 0.0, 0.0], [w.min(0.4), 0.15, 0.4], BAG, id),
                 2 => {
