@@ -64,7 +64,7 @@ pub fn decode(v: f32) -> Option<(u8, f32)> {
 /// ```
 /// # let dir = std::env::temp_dir().join(format!("sndt-npy-doc-{}", std::process::id()));
 /// # std::fs::create_dir_all(&dir).unwrap();
-/// use sndt_host::{dataset::TopK, npy};
+/// use sndt_host::dataset::{npy, TopK};
 /// let path = dir.join("frame.npy");
 /// let topk = TopK { classes: vec![[2, 1, 5]], scores: vec![[0.75, 0.125, 0.0625]] };
 /// npy::write_topk(&path, &topk, 1, 1).unwrap();
@@ -136,7 +136,7 @@ pub fn read_topk(path: &Path, width: u32, height: u32) -> Result<TopK> {
 /// ```
 /// # let dir = std::env::temp_dir().join(format!("sndt-npy-doc-w-{}", std::process::id()));
 /// # std::fs::create_dir_all(&dir).unwrap();
-/// use sndt_host::{dataset::TopK, npy};
+/// use sndt_host::dataset::{npy, TopK};
 /// let topk = TopK { classes: vec![[0, 1, 2]], scores: vec![[0.5; 3]] };
 /// assert!(npy::write_topk(&dir.join("bad.npy"), &topk, 1, 1).is_err()); // class 0
 /// # std::fs::remove_dir_all(&dir).unwrap();

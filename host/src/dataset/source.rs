@@ -81,7 +81,7 @@ impl Dataset for Every {
     }
 }
 
-/// Options for [`open`].
+/// Options for [`open`](crate::dataset::open::open).
 #[derive(Clone, Debug, Default)]
 pub struct OpenOptions {
     /// Split name of the prepared layout (default `test`).
