@@ -10,7 +10,7 @@
 //! | [`cli`] | the `sndt` command line (the only user of clap), one file per command |
 //! | [`eval`] | the paper's metrics, the evaluation loop, the experiment, core-vs-reference |
 //! | [`baselines`] | S-BKI and OS-BKI |
-//! | [`reference`] | S-NDT in plain `f64` with std collections, the core's test oracle |
+//! | [`reference`](mod@reference) | S-NDT in plain `f64` with std collections, the core's test oracle |
 //! | [`output`] | PNG pictures, SVG charts, PLY export |
 //! | [`embedded`] | memory budget and the firmware's test vector |
 //! | [`semantic_map`] | the [`SemanticMap`](semantic_map::SemanticMap) trait every mapper implements |
