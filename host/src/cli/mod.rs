@@ -514,9 +514,10 @@ fn map_command(a: &MapArgs) -> Result<()> {
 
 fn export(a: &ExportArgs) -> Result<()> {
     use crate::dataset::open::open_spec;
-    use crate::eval::evaluate::{integrate_frame, load_snapshot, EvalMap};
+    use crate::eval::evaluate::load_snapshot;
+    use crate::semantic_map::{integrate_frame, HostMap};
     let path = std::path::Path::new(&a.input);
-    let map: Box<EvalMap> = if path.is_file() {
+    let map: Box<HostMap> = if path.is_file() {
         load_snapshot(path)?
     } else {
         let dataset = open_spec(&a.input, &crate::dataset::source::OpenOptions::default())?;
@@ -524,7 +525,7 @@ fn export(a: &ExportArgs) -> Result<()> {
         let (name, ids) = trajectories
             .first()
             .ok_or_else(|| anyhow::anyhow!("{}: no frames", a.input))?;
-        let mut map: Box<EvalMap> = crate::semantic_map::boxed_map(Config::with_cell_size(a.cell))
+        let mut map: Box<HostMap> = crate::semantic_map::boxed_map(Config::with_cell_size(a.cell))
             .map_err(|e| anyhow::anyhow!("config: {e:?}"))?;
         let bar = progress(ids.len() as u64, "map");
         for id in ids {
