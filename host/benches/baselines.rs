@@ -11,7 +11,7 @@ use sndt_core::Config;
 use sndt_host::baselines::bki::{BkiConfig, BkiMap, Readout};
 use sndt_host::dataset::open_spec;
 use sndt_host::dataset::{Frame, LabelSource};
-use sndt_host::eval::evaluate::{integrate_frame, EvalMap};
+use sndt_host::semantic_map::{integrate_frame, HostMap};
 use std::time::Instant;
 
 fn main() {
@@ -23,7 +23,7 @@ fn main() {
             let f = data.load(id).expect("frame renders");
             // Feed predicted top-1 labels to both mappers.
             Frame {
-                labels: f.predictions.as_ref().map(|p| p.top1()),
+                labels: f.predictions.as_ref().map(sndt_host::dataset::TopK::top1),
                 predictions: None,
                 ..f
             }
@@ -40,7 +40,7 @@ fn main() {
         "cell", "method", "ms/frame", "samples/fr", "S-BKI r/o", "OS-BKI r/o", "BKI/NDT", "MiB"
     );
     for cell in [0.05f32, 0.10, 0.15, 0.20] {
-        let mut map: Box<EvalMap> =
+        let mut map: Box<HostMap> =
             sndt_host::semantic_map::boxed_map(Config::with_cell_size(cell)).expect("valid config");
         let t = Instant::now();
         for f in &frames {
@@ -56,7 +56,7 @@ fn main() {
             "",
             "",
             "1.0",
-            core::mem::size_of::<EvalMap>() as f64 / (1 << 20) as f64
+            core::mem::size_of::<HostMap>() as f64 / (1 << 20) as f64
         );
         for l in [0.1f32, 0.2, 0.3, 0.4] {
             let mut bki = BkiMap::new(BkiConfig::new(cell, l)).expect("valid config");

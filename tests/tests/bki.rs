@@ -3,13 +3,15 @@
 //! labels: S-BKI opens holes, OS-BKI keeps it), ray casting against an exact reference,
 //! bad input, and `sndt experiment`'s S-NDT rows against the evaluation loop.
 
-use sndt_core::{Config, DepthKind, Isometry3, Pinhole, Translation3, UnitQuaternion};
+use sndt_core::{
+    Config, DepthKind, Isometry3, Pinhole, Translation3, UnitQuaternion, INVALID_LABEL,
+};
 use sndt_host::baselines::bki::{
-    kernel, BkiConfig, BkiMap, Readout, Sample, VoxelState, FREE, INVALID, UNCLASSIFIED,
+    kernel, BkiConfig, BkiMap, Readout, Sample, VoxelState, FREE, UNCLASSIFIED,
 };
 use sndt_host::dataset::open_spec;
 use sndt_host::dataset::{Frame, FrameId, LabelSource, Rays};
-use sndt_host::eval::experiment::{run, ExperimentOptions, Labels, Method, RunKey};
+use sndt_host::eval::experiment::{run, ExperimentOptions, Method, RunKey, Segmentation};
 use std::sync::Arc;
 
 /// Reference values: sigma0 [ (2 + cos 2 pi r)(1 - r) / 3 + sin(2 pi r) / (2 pi) ],
@@ -357,7 +359,7 @@ fn label_grid_rays_return_the_first_occupied_voxel() {
     f.depth = vec![f32::NAN];
     assert_eq!(g.render(&f, 20.0), vec![9]);
     f.pose.translation.vector.x = 3.0;
-    assert_eq!(g.render(&f, 20.0), vec![INVALID]);
+    assert_eq!(g.render(&f, 20.0), vec![INVALID_LABEL]);
 }
 
 #[test]
@@ -420,8 +422,8 @@ fn experiment_sndt_rows_equal_the_evaluation_loop() {
     assert_eq!(exp.frames, 6);
     assert_eq!(exp.runs.len(), 2 * (1 + 2 * 2));
     for (labels, source) in [
-        (Labels::Gt, LabelSource::Gt),
-        (Labels::Pred, LabelSource::Pred),
+        (Segmentation::Gt, LabelSource::Gt),
+        (Segmentation::Pred, LabelSource::Pred),
     ] {
         let eval = sndt_host::eval::evaluate::evaluate(
             data.as_ref(),
@@ -460,7 +462,7 @@ fn experiment_sndt_rows_equal_the_evaluation_loop() {
     // S-BKI and OS-BKI share their map: same update times.
     let time = |method| {
         exp.runs[&RunKey {
-            labels: Labels::Gt,
+            labels: Segmentation::Gt,
             method,
             kernel_mm: 200,
             cell_mm: 200,
@@ -520,7 +522,7 @@ fn experiment_passes_votes_per_frame_to_the_sndt_maps() {
         .confusion
     };
     let key = RunKey {
-        labels: Labels::Pred,
+        labels: Segmentation::Pred,
         method: Method::Sndt,
         kernel_mm: 0,
         cell_mm: 200,

@@ -5,9 +5,8 @@
 use sndt_core::{Config, Pinhole};
 use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
 use sndt_host::dataset::{Dataset, Frame, LabelSource, Rays};
-use sndt_host::eval::evaluate::{
-    backproject, evaluate, integrate_frame, load_snapshot, save_snapshot, EvalMap, EvalOptions,
-};
+use sndt_host::eval::evaluate::{evaluate, load_snapshot, save_snapshot, EvalOptions};
+use sndt_host::semantic_map::{backproject, integrate_frame, HostMap};
 use std::sync::Arc;
 
 const CAM: Pinhole = Pinhole {
@@ -139,7 +138,7 @@ fn predicted_labels_make_worse_maps_than_ground_truth() {
 #[test]
 fn per_pixel_rays_backproject_like_the_pinhole() {
     let data = split(4);
-    let mut map: Box<EvalMap> =
+    let mut map: Box<HostMap> =
         sndt_host::semantic_map::boxed_map(Config::with_cell_size(0.1)).unwrap();
     let ids: Vec<_> = data.trajectories()[0].1.clone();
     for id in &ids {
@@ -172,7 +171,7 @@ fn per_pixel_rays_backproject_like_the_pinhole() {
 #[test]
 fn snapshots_round_trip_through_files() {
     let data = split(3);
-    let mut map: Box<EvalMap> =
+    let mut map: Box<HostMap> =
         sndt_host::semantic_map::boxed_map(Config::with_cell_size(0.15)).unwrap();
     for id in &data.trajectories()[1].1 {
         integrate_frame(map.as_mut(), &data.load(id).unwrap(), LabelSource::Gt, 2).unwrap();
@@ -194,4 +193,76 @@ fn snapshots_round_trip_through_files() {
         "{err}"
     );
     std::fs::remove_file(&path).unwrap();
+}
+
+/// Every mapper runs through the same trait and the same loop: S-NDT, the f64 reference and
+/// the BKI map (read out twice) each integrate the frames, render label images of the
+/// frame's size in the label range, and report their size.
+#[test]
+fn every_mapper_runs_through_one_loop() {
+    use sndt_host::baselines::bki::{BkiConfig, BkiMap, Readout};
+    use sndt_host::eval::evaluate::{map_and_score, MapScore};
+    use sndt_host::reference::RefMap;
+    use sndt_host::semantic_map::SemanticMap;
+    use std::borrow::Cow;
+    let data = split(3);
+    let frames: Vec<Frame> = data.trajectories()[0]
+        .1
+        .iter()
+        .map(|id| data.load(id).unwrap())
+        .collect();
+    fn run<M: SemanticMap + ?Sized>(map: &mut M, frames: &[Frame], r: &[M::Readout]) -> MapScore {
+        let mut renders = 0;
+        let score = map_and_score(
+            map,
+            frames.iter().map(|f| Ok(Cow::Borrowed(f))),
+            LabelSource::Gt,
+            1,
+            r,
+            |_| Ok(()),
+            |f, labels| {
+                assert_eq!(labels.len(), f.pixels());
+                assert!(labels
+                    .iter()
+                    .all(|&l| l <= 40 || l == sndt_core::INVALID_LABEL));
+                renders += 1;
+                Ok(())
+            },
+        )
+        .unwrap();
+        assert_eq!(renders, frames.len() * r.len());
+        assert_eq!(score.update_ms.len(), frames.len());
+        assert_eq!(score.confusions.len(), r.len());
+        assert!(map.voxel_count() > 100 && map.memory_bytes() > 0);
+        score
+    }
+    let config = Config::with_cell_size(0.1);
+    let mut core: Box<HostMap> = sndt_host::semantic_map::boxed_map(config).unwrap();
+    let mut reference = RefMap::new(config, 40);
+    let mut bki = BkiMap::new(BkiConfig::new(0.1, 0.3)).unwrap();
+    let scores = [
+        run(core.as_mut(), &frames, &[()]),
+        run(&mut reference, &frames, &[()]),
+        run(&mut bki, &frames, &[Readout::Sbki, Readout::Osbki]),
+    ];
+    for score in &scores {
+        for c in &score.confusions {
+            assert!(c.metrics().miou > 0.3, "mIoU {}", c.metrics().miou);
+        }
+    }
+    // The core's view is the evaluation's back-projection; the reference's is its index.
+    let f = &frames[1];
+    assert_eq!(
+        core.prepare(()).render_frame(f).unwrap(),
+        backproject(core.as_ref(), f).unwrap()
+    );
+    let (mut labels, mut dist) = (vec![0; f.pixels()], vec![0.0; f.pixels()]);
+    reference
+        .render_index()
+        .render(&f.pose, &f.rays, &mut labels, &mut dist)
+        .unwrap();
+    assert_eq!(reference.prepare(()).render_frame(f).unwrap(), labels);
+    // BKI takes one label per pixel and every pixel.
+    assert!(bki.integrate_frame(f, LabelSource::PredTopk, 1).is_err());
+    assert!(bki.integrate_frame(f, LabelSource::Gt, 2).is_err());
 }

@@ -1,5 +1,5 @@
 //! The f64 reference S-NDT (`sndt_host::reference`) against hand calculations, and the
-//! core against the reference within the tolerances of issue 4 on a fixed synthetic
+//! core against the reference within the stated tolerances (`TOLERANCES`, docs/ARCHITECTURE.md) on a fixed synthetic
 //! trajectory at 10 cm.
 
 use sndt_core::{

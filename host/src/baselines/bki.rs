@@ -1,5 +1,6 @@
 //! The baselines S-NDT is compared with: S-BKI (Gan et al., RA-L 2020) and the paper's
-//! optimised OS-BKI (section III-B), as DESIGN.md section 3 describes them.
+//! optimised OS-BKI (the paper's section III-B); `docs/ARCHITECTURE.md` (evaluation
+//! protocol, baselines) sums them up.
 //!
 //! Both run Bayesian kernel inference on a voxel grid: every training point (a labelled
 //! hit, or a free sample along a ray) adds the sparse kernel `k(|x - x_i|)` to one
@@ -25,23 +26,23 @@
 //! evidence; a voxel without evidence is unknown (neither free nor occupied).
 //!
 //! The kernel is evaluated exactly over its whole support (S-BKI's code truncates it at a
-//! block's face neighbours; DESIGN.md asks for results independent of the spatial index).
+//! block's face neighbours; results here must not depend on the spatial index).
 //! Voxels live in hashed blocks of 8^3.
 
-use crate::dataset::frame::Frame;
+use crate::dataset::frame::{Frame, LabelSource};
+use crate::semantic_map::{LabelView, SemanticMap};
 use anyhow::{bail, Result};
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
+use sndt_core::INVALID_LABEL;
 
-/// Counts per voxel: free, classes 1..=40, hits without a class (void).
-pub const BINS: usize = 42;
+/// Dirichlet counts per voxel: free, classes 1..=40, hits without a class (void).
+pub const COUNT_BINS: usize = 42;
 /// Count index of the free class.
 pub const FREE: usize = 0;
 /// Count index of occupied evidence without a class (hits labelled void).
-pub const UNCLASSIFIED: usize = BINS - 1;
-/// Label returned by [`LabelGrid`] rays that hit nothing occupied.
-pub const INVALID: u8 = 255;
+pub const UNCLASSIFIED: usize = COUNT_BINS - 1;
 
 const BLOCK_BITS: i32 = 3;
 const BLOCK_SIDE: i32 = 1 << BLOCK_BITS;
@@ -88,7 +89,7 @@ impl BkiConfig {
     /// down-sampling at the cell size as S-BKI's configuration for depth images (KITTI 15),
     /// free samples every 0.3 m along each beam (BGKOctoMap's published configurations use
     /// 0.2-0.5 m; one sample per cell crossed made every kernel of more than two cells read
-    /// 30-90 % of the surface voxels free in both read-outs, see README "Baselines"), max
+    /// 30-90 % of the surface voxels free in both read-outs on the synthetic split), max
     /// range 20 m, occupancy threshold 0.5.
     ///
     /// ```
@@ -188,7 +189,7 @@ impl KernelTable {
     }
 }
 
-type Counts = [f32; BINS];
+type Counts = [f32; COUNT_BINS];
 
 /// What one frame's update did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -350,7 +351,7 @@ impl BkiMap {
         let l = self.config.kernel_length;
         let l2 = self.table.l2;
         let p = s.position;
-        if s.bin >= BINS || !p.iter().all(|x| x.is_finite() && x.abs() < 1e6) {
+        if s.bin >= COUNT_BINS || !p.iter().all(|x| x.is_finite() && x.abs() < 1e6) {
             return;
         }
         // Voxel i's centre is (i + 0.5) res; those within l of p on each axis.
@@ -385,7 +386,7 @@ impl BkiMap {
                     let block = self
                         .blocks
                         .entry(b)
-                        .or_insert_with(|| vec![0.0; BINS * BLOCK_VOXELS].into_boxed_slice());
+                        .or_insert_with(|| vec![0.0; COUNT_BINS * BLOCK_VOXELS].into_boxed_slice());
                     let counts = &mut block[s.bin * BLOCK_VOXELS..(s.bin + 1) * BLOCK_VOXELS];
                     for z in from[2]..=to[2] {
                         let dz = centre(z, 2);
@@ -483,7 +484,7 @@ impl BkiMap {
         match readout {
             Readout::Sbki => {
                 // The prior is the same for every class, so it does not move the argmax.
-                let (bin, _) = argmax(0..BINS);
+                let (bin, _) = argmax(0..COUNT_BINS);
                 if bin == FREE {
                     VoxelState::Free
                 } else {
@@ -519,7 +520,7 @@ impl BkiMap {
         let origin = lo.map(|v| v << BLOCK_BITS);
         let dims: [usize; 3] =
             core::array::from_fn(|a| ((hi[a] - lo[a] + 1) << BLOCK_BITS) as usize);
-        let mut cells = vec![INVALID; dims[0] * dims[1] * dims[2]];
+        let mut cells = vec![INVALID_LABEL; dims[0] * dims[1] * dims[2]];
         for (k, block) in &self.blocks {
             for i in 0..BLOCK_VOXELS {
                 if let VoxelState::Occupied(class) = self.state(&voxel_counts(block, i), readout) {
@@ -537,6 +538,73 @@ impl BkiMap {
             dims,
             cells,
         }
+    }
+}
+
+/// S-BKI and OS-BKI as the evaluation runs them: one count map, read out either way.
+impl SemanticMap for BkiMap {
+    type Readout = Readout;
+
+    /// [`BkiMap::integrate`] with one label per pixel: the ground truth (`gt`), the
+    /// prediction's top 1 (`pred`) or none; a frame without the labels asked for adds
+    /// geometry only, as in S-NDT. BKI takes no top-k labels and maps every pixel, so
+    /// `pred-topk` and a stride other than 1 are errors.
+    fn integrate_frame(&mut self, frame: &Frame, labels: LabelSource, stride: u32) -> Result<()> {
+        if stride != 1 {
+            bail!(
+                "{}: S-BKI / OS-BKI map every pixel, not stride {stride}",
+                frame.id
+            );
+        }
+        let top1: Vec<u8>;
+        let labels = match labels {
+            LabelSource::None => None,
+            LabelSource::Gt => frame.labels.as_deref(),
+            LabelSource::Pred => match &frame.predictions {
+                Some(p) => {
+                    top1 = p.top1();
+                    Some(&top1[..])
+                }
+                None => None,
+            },
+            LabelSource::PredTopk => {
+                bail!(
+                    "{}: S-BKI / OS-BKI take one label per pixel (gt or pred)",
+                    frame.id
+                )
+            }
+        };
+        self.integrate(frame, labels).map(|_| ())
+    }
+
+    /// The read-out as a dense [`LabelGrid`], built once.
+    fn prepare(&self, readout: Readout) -> Box<dyn LabelView + '_> {
+        Box::new(GridView {
+            grid: self.label_grid(readout),
+            max_range: self.config.max_range,
+        })
+    }
+
+    /// The counts and the surface bits.
+    fn memory_bytes(&self) -> usize {
+        self.bytes() + self.surface.len() * BLOCK_VOXELS / 8
+    }
+
+    /// Voxels of the allocated blocks (every voxel within a kernel length of a sample).
+    fn voxel_count(&self) -> usize {
+        self.blocks.len() * BLOCK_VOXELS
+    }
+}
+
+/// A read-out's label grid, rendered up to the map's `max_range`.
+struct GridView {
+    grid: LabelGrid,
+    max_range: f32,
+}
+
+impl LabelView for GridView {
+    fn render_frame(&self, frame: &Frame) -> Result<Vec<u8>> {
+        Ok(self.grid.render(frame, self.max_range))
     }
 }
 
@@ -609,7 +677,7 @@ impl Downsampler {
                 let n = self.cells.len() as u32;
                 let i = *self.index.entry(key).or_insert(n);
                 if i == n {
-                    self.cells.push(([0.0; 3], 0, [0.0; BINS]));
+                    self.cells.push(([0.0; 3], 0, [0.0; COUNT_BINS]));
                 }
                 self.last = Some((key, i));
                 i
@@ -632,7 +700,7 @@ impl Downsampler {
             .map(|(sum, n, votes)| {
                 // Majority label; ties to the lower index.
                 let mut bin = 0;
-                for b in 1..BINS {
+                for b in 1..COUNT_BINS {
                     if votes[b] > votes[bin] {
                         bin = b;
                     }
@@ -677,7 +745,7 @@ fn free_samples(origin: &[f32; 3], hits: &[Sample], config: BkiConfig) -> Vec<Sa
     frees.samples()
 }
 
-/// A dense grid of read-out labels (class 0..=40 where occupied, [`INVALID`] elsewhere)
+/// A dense grid of read-out labels (class 0..=40 where occupied, [`INVALID_LABEL`] elsewhere)
 /// that renders back-projections: a pixel's ray returns the class of the first occupied
 /// voxel it enters.
 #[derive(Clone, Debug)]
@@ -700,7 +768,7 @@ impl LabelGrid {
 
     /// Number of occupied voxels.
     pub fn occupied(&self) -> usize {
-        self.cells.iter().filter(|&&c| c != INVALID).count()
+        self.cells.iter().filter(|&&c| c != INVALID_LABEL).count()
     }
 
     /// The class of the first occupied voxel along the ray from `origin` in unit direction
@@ -762,7 +830,7 @@ impl LabelGrid {
         let mut idx = v[0] + v[1] * sx + v[2] * sxy;
         loop {
             let c = self.cells[idx as usize];
-            if c != INVALID {
+            if c != INVALID_LABEL {
                 return Some(c);
             }
             let a = if next[0] < next[1] {
@@ -788,20 +856,20 @@ impl LabelGrid {
         }
     }
 
-    /// Back-projects the grid into `frame` at its pose: one label per pixel, [`INVALID`]
+    /// Back-projects the grid into `frame` at its pose: one label per pixel, [`INVALID_LABEL`]
     /// where the ray meets nothing occupied within `max_range`. Row bands in parallel.
     pub fn render(&self, frame: &Frame, max_range: f32) -> Vec<u8> {
         let (w, h) = (frame.rays.width() as usize, frame.rays.height() as usize);
         let t = frame.pose.translation.vector;
         let origin = [t.x, t.y, t.z];
-        let mut out = vec![INVALID; w * h];
+        let mut out = vec![INVALID_LABEL; w * h];
         out.par_chunks_mut(w).enumerate().for_each(|(row, line)| {
             for (col, px) in line.iter_mut().enumerate() {
                 let r = frame.rays.ray(col as u32, row as u32);
                 let d = (frame.pose.rotation * Vector3::new(r[0], r[1], r[2])).normalize();
                 *px = self
                     .cast(origin, [d.x, d.y, d.z], max_range)
-                    .unwrap_or(INVALID);
+                    .unwrap_or(INVALID_LABEL);
             }
         });
         out

@@ -5,9 +5,10 @@ use crate::cli::labels::LabelArg;
 use crate::dataset::frame::LabelSource;
 use crate::dataset::open::open_spec;
 use crate::dataset::source::OpenOptions;
-use crate::eval::evaluate::{integrate_frame, load_snapshot, EvalMap};
+use crate::eval::evaluate::load_snapshot;
 use crate::output::export::{ellipsoids, write_ellipsoids, write_points};
 use crate::output::progress::progress;
+use crate::semantic_map::{integrate_frame, HostMap};
 use anyhow::Result;
 use sndt_core::Config;
 use std::path::{Path, PathBuf};
@@ -63,13 +64,13 @@ pub fn run(a: &ExportArgs) -> Result<()> {
 }
 
 /// Maps the first trajectory of the dataset `spec` at `cell` with `labels`.
-fn map_first_trajectory(spec: &str, cell: f32, labels: LabelSource) -> Result<Box<EvalMap>> {
+fn map_first_trajectory(spec: &str, cell: f32, labels: LabelSource) -> Result<Box<HostMap>> {
     let dataset = open_spec(spec, &OpenOptions::default())?;
     let trajectories = dataset.trajectories();
     let (name, ids) = trajectories
         .first()
         .ok_or_else(|| anyhow::anyhow!("{spec}: no frames"))?;
-    let mut map: Box<EvalMap> = crate::semantic_map::boxed_map(Config::with_cell_size(cell))
+    let mut map: Box<HostMap> = crate::semantic_map::boxed_map(Config::with_cell_size(cell))
         .map_err(|e| anyhow::anyhow!("config: {e:?}"))?;
     let bar = progress(ids.len() as u64, "map");
     for id in ids {

@@ -1,7 +1,11 @@
-//! The paper's evaluation loop (DESIGN.md section 4): one map per trajectory, built from
-//! every frame in order (single-threaded, timed), then back-projected into every frame of
-//! that trajectory at its ground-truth pose with the core's `raycast`; one confusion matrix
-//! over all frames of the split; each back-projection written as a plain 8-bit PNG at
+//! The paper's evaluation protocol (`docs/ARCHITECTURE.md`, evaluation protocol): one map
+//! per trajectory, built from every frame in order (single-threaded, timed), then
+//! back-projected into every frame of that trajectory at its ground-truth pose; one
+//! confusion matrix over all frames of the split.
+//!
+//! [`map_and_score`] is that loop for any [`SemanticMap`] and read-out: the experiment
+//! runs S-NDT, S-BKI and OS-BKI through it. [`evaluate`] runs S-NDT through it on a whole
+//! dataset (`sndt map`), writing each back-projection as a plain 8-bit PNG at
 //! `<out>/<scene>/<cam>/<NNNN>.png` (0 void, 1..40 class, 255 invalid) for the authors'
 //! evaluate.py.
 //!
@@ -9,20 +13,16 @@
 //! times stay comparable to single-threaded figures; back-projection of a frame is split
 //! into row bands rendered in parallel.
 
-use crate::dataset::frame::{Frame, LabelSource, Rays};
-
+use crate::dataset::frame::{Frame, FrameId, LabelSource};
 use crate::dataset::source::Dataset;
 use crate::eval::metrics::{Confusion, Metrics};
+use crate::semantic_map::{boxed_map, HostMap, SemanticMap};
 use anyhow::{anyhow, Context, Result};
 use rayon::prelude::*;
-use sndt_core::{
-    Config, DepthImage, DepthKind, LabelImage, Labels, Map, Pinhole, Point3, Vector3, INVALID_LABEL,
-};
-use std::path::PathBuf;
+use sndt_core::{Config, DepthKind, Map};
+use std::borrow::Cow;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-/// Map capacity used for evaluation: 2^19 NDT voxels, 2^17 blocks, 40 classes (~74 MiB).
-pub type EvalMap = Map<{ 1 << 19 }, { 1 << 17 }, 40>;
 
 /// What to evaluate.
 #[derive(Clone, Debug)]
@@ -36,7 +36,7 @@ pub struct EvalOptions {
     /// Use every `stride`-th pixel when mapping (1 = all, as the paper).
     pub stride: u32,
     /// Frames whose back-projections to return in [`Evaluation::kept`] (for pictures).
-    pub keep_frames: Vec<crate::dataset::frame::FrameId>,
+    pub keep_frames: Vec<FrameId>,
     /// Whether to return the final maps in [`Evaluation::maps`].
     pub keep_maps: bool,
     /// Directory to write each trajectory's final map snapshot into
@@ -93,9 +93,9 @@ pub struct Evaluation {
     /// themselves (e.g. the network alone, without mapping).
     pub input: Confusion,
     /// Back-projections of the frames asked for in [`EvalOptions::keep_frames`].
-    pub kept: Vec<(crate::dataset::frame::FrameId, Vec<u8>)>,
+    pub kept: Vec<(FrameId, Vec<u8>)>,
     /// Final maps, per trajectory, when [`EvalOptions::keep_maps`].
-    pub maps: Vec<Box<EvalMap>>,
+    pub maps: Vec<Box<HostMap>>,
 }
 
 impl Evaluation {
@@ -150,100 +150,74 @@ impl Evaluation {
     }
 }
 
-/// Integrates one frame into `map` with labels from `source`.
-pub fn integrate_frame<const V: usize, const B: usize, const C: usize>(
-    map: &mut Map<V, B, C>,
-    frame: &Frame,
-    source: LabelSource,
-    stride: u32,
-) -> Result<sndt_core::FrameReport> {
-    let err = |e: sndt_core::Error| anyhow!("{}: integrate: {e:?}", frame.id);
-    match frame.rays.as_ref() {
-        Rays::Pinhole(cam) => {
-            let top1: Vec<u8>;
-            let topk: Vec<Labels>;
-            let labels = match source {
-                LabelSource::None => LabelImage::None,
-                LabelSource::Gt => match &frame.labels {
-                    Some(l) => LabelImage::Top1(l),
-                    None => LabelImage::None,
-                },
-                LabelSource::Pred => match &frame.predictions {
-                    Some(p) => {
-                        top1 = p.top1();
-                        LabelImage::Top1(&top1)
-                    }
-                    None => LabelImage::None,
-                },
-                LabelSource::PredTopk => match &frame.predictions {
-                    Some(p) => {
-                        topk = (0..frame.pixels()).map(|i| p.labels(i)).collect();
-                        LabelImage::TopK(&topk)
-                    }
-                    None => LabelImage::None,
-                },
-            };
-            let image = DepthImage {
-                camera: *cam,
-                depth: &frame.depth,
-                kind: frame.depth_kind,
-                labels,
-                stride,
-            };
-            map.integrate_depth(&frame.pose, &image).map_err(err)
-        }
-        Rays::PerPixel { .. } => {
-            let points = frame.camera_points(source, stride);
-            map.integrate(&frame.pose, &points).map_err(err)
-        }
+/// One map's pass over one trajectory, from [`map_and_score`].
+#[derive(Clone, Debug, Default)]
+pub struct MapScore {
+    /// Update time per frame, milliseconds.
+    pub update_ms: Vec<f64>,
+    /// Per read-out asked for, in that order: its renders scored over all frames.
+    pub confusions: Vec<Confusion>,
+}
+
+impl MapScore {
+    /// Total update time, seconds.
+    pub fn update_seconds(&self) -> f64 {
+        self.update_ms.iter().sum::<f64>() / 1e3
     }
 }
 
-/// Back-projects `map` into a frame's camera: one label per pixel (0..=40, 255 invalid).
-/// Row bands are rendered in parallel.
-pub fn backproject<const V: usize, const B: usize, const C: usize>(
-    map: &Map<V, B, C>,
-    frame: &Frame,
-) -> Result<Vec<u8>> {
-    let (w, h) = (frame.rays.width() as usize, frame.rays.height() as usize);
-    let mut labels = vec![INVALID_LABEL; w * h];
-    const BAND: usize = 32;
-    labels
-        .par_chunks_mut(BAND * w)
-        .enumerate()
-        .try_for_each(|(band, out)| -> Result<()> {
-            let row0 = band * BAND;
-            let rows = out.len() / w;
-            match frame.rays.as_ref() {
-                Rays::Pinhole(cam) => {
-                    // The band as a camera of its own: same rays, principal point shifted.
-                    let sub = Pinhole {
-                        cy: cam.cy - row0 as f32,
-                        height: rows as u32,
-                        ..*cam
-                    };
-                    let mut dist = vec![0f32; out.len()];
-                    map.render(&frame.pose, &sub, out, &mut dist)
-                        .map_err(|e| anyhow!("{}: render: {e:?}", frame.id))
-                }
-                Rays::PerPixel { .. } => {
-                    let o = frame.pose.translation.vector;
-                    let origin = Point3::new(o.x, o.y, o.z);
-                    for r in 0..rows {
-                        for c in 0..w {
-                            let ray = frame.rays.ray(c as u32, (row0 + r) as u32);
-                            let d = frame.pose.rotation
-                                * Vector3::new(ray[0], ray[1], ray[2]).normalize();
-                            out[r * w + c] = map
-                                .raycast(&origin, &d, map.config().max_range)
-                                .map_or(INVALID_LABEL, |hit| hit.class);
-                        }
-                    }
-                    Ok(())
-                }
+/// The paper's evaluation of one map on one trajectory, the same for every method: each
+/// frame is integrated in order with labels from `labels` (every `stride`-th pixel), each
+/// update timed on its own; then each read-out in `readouts` is prepared once and
+/// rendered into every frame at the frame's pose, and the renders are scored against the
+/// frames' ground truth (a frame without it is rendered but not scored).
+///
+/// Frames arrive one at a time from `frames`, so a caller can load them lazily: borrowed
+/// frames are rendered as they are, owned ones are kept without their predictions, which
+/// rendering does not need. `after_update` sees each frame after its (timed) update,
+/// `after_render` each frame's render.
+pub fn map_and_score<'f, M: SemanticMap + ?Sized>(
+    map: &mut M,
+    frames: impl IntoIterator<Item = Result<Cow<'f, Frame>>>,
+    labels: LabelSource,
+    stride: u32,
+    readouts: &[M::Readout],
+    mut after_update: impl FnMut(&Frame) -> Result<()>,
+    mut after_render: impl FnMut(&Frame, &[u8]) -> Result<()>,
+) -> Result<MapScore> {
+    let mut update_ms = Vec::new();
+    let mut kept = Vec::new();
+    for frame in frames {
+        let frame = frame?;
+        let t = Instant::now();
+        map.integrate_frame(&frame, labels, stride)?;
+        update_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        after_update(&frame)?;
+        kept.push(match frame {
+            Cow::Borrowed(f) => Cow::Borrowed(f),
+            Cow::Owned(f) => Cow::Owned(Frame {
+                predictions: None,
+                ..f
+            }),
+        });
+    }
+    let mut confusions = Vec::with_capacity(readouts.len());
+    for &readout in readouts {
+        let view = map.prepare(readout);
+        let mut confusion = Confusion::default();
+        for frame in &kept {
+            let rendered = view.render_frame(frame)?;
+            if let Some(gt) = &frame.labels {
+                confusion.add_frame(gt, &rendered, &gt_depth(frame));
             }
-        })?;
-    Ok(labels)
+            after_render(frame, &rendered)?;
+        }
+        confusions.push(confusion);
+    }
+    Ok(MapScore {
+        update_ms,
+        confusions,
+    })
 }
 
 /// Maps every trajectory of `dataset` and evaluates it. `progress` is called once per
@@ -257,90 +231,10 @@ pub fn evaluate(
         .config
         .validate()
         .map_err(|e| anyhow!("config: {e:?}"))?;
-    let trajectories = dataset.trajectories();
-    type Part = (
-        Confusion,
-        Confusion,
-        TrajectoryResult,
-        Vec<(crate::dataset::frame::FrameId, Vec<u8>)>,
-        Option<Box<EvalMap>>,
-    );
-    let results: Vec<Result<Part>> = trajectories
+    let parts: Vec<Result<TrajectoryEvaluation>> = dataset
+        .trajectories()
         .par_iter()
-        .map(|(name, ids)| -> Result<Part> {
-            let mut map: Box<EvalMap> = crate::semantic_map::boxed_map(options.config)
-                .map_err(|e| anyhow!("config: {e:?}"))?;
-            let mut kept = Vec::with_capacity(ids.len());
-            let mut input = Confusion::default();
-            let mut update_ms = Vec::with_capacity(ids.len());
-            for id in ids {
-                let frame = dataset.load(id)?;
-                let t = Instant::now();
-                integrate_frame(map.as_mut(), &frame, options.labels, options.stride)?;
-                update_ms.push(t.elapsed().as_secs_f64() * 1e3);
-                if let Some(gt) = &frame.labels {
-                    let given: Vec<u8> = (0..frame.pixels())
-                        .map(|i| frame.point_labels(i, options.labels).classes[0])
-                        .collect();
-                    input.add_frame(gt, &given, &gt_depth(&frame));
-                }
-                // Predictions are not needed any more; keep depth, labels and pose.
-                kept.push(Frame {
-                    predictions: None,
-                    ..frame
-                });
-                progress();
-            }
-            if let Some(dir) = &options.save_maps {
-                save_snapshot(
-                    map.as_ref(),
-                    &dir.join(format!("{}.sndt", name.replace('/', "_"))),
-                )?;
-            }
-            let mut confusion = Confusion::default();
-            let mut images = Vec::new();
-            for f in &kept {
-                let pred = backproject(map.as_ref(), f)?;
-                if let Some(gt) = &f.labels {
-                    confusion.add_frame(gt, &pred, &gt_depth(f));
-                }
-                if let Some(out) = &options.out {
-                    let path = out
-                        .join(&f.id.scene)
-                        .join(&f.id.cam)
-                        .join(format!("{}.png", f.id.stem()));
-                    if let Some(dir) = path.parent() {
-                        std::fs::create_dir_all(dir)
-                            .with_context(|| format!("creating {}", dir.display()))?;
-                    }
-                    crate::dataset::prepared::write_gray8(
-                        &path,
-                        f.rays.width(),
-                        f.rays.height(),
-                        &pred,
-                    )?;
-                }
-                if options.keep_frames.contains(&f.id) {
-                    images.push((f.id.clone(), pred));
-                }
-                progress();
-            }
-            let stats = map.stats();
-            Ok((
-                confusion,
-                input,
-                TrajectoryResult {
-                    name: name.clone(),
-                    frames: ids.len(),
-                    update_ms,
-                    voxels: map.len(),
-                    blocks: map.block_count(),
-                    evicted: stats.voxels_evicted,
-                },
-                images,
-                options.keep_maps.then_some(map),
-            ))
-        })
+        .map(|(name, ids)| evaluate_trajectory(dataset, name, ids, options, progress))
         .collect();
     let mut eval = Evaluation {
         confusion: Confusion::default(),
@@ -349,15 +243,106 @@ pub fn evaluate(
         kept: Vec::new(),
         maps: Vec::new(),
     };
-    for r in results {
-        let (c, i, t, images, map) = r?;
-        eval.confusion.merge(&c);
-        eval.input.merge(&i);
-        eval.trajectories.push(t);
-        eval.kept.extend(images);
-        eval.maps.extend(map);
+    for part in parts {
+        let part = part?;
+        eval.confusion.merge(&part.confusion);
+        eval.input.merge(&part.input);
+        eval.trajectories.push(part.result);
+        eval.kept.extend(part.kept);
+        eval.maps.extend(part.map);
     }
     Ok(eval)
+}
+
+/// One trajectory's share of an [`Evaluation`].
+struct TrajectoryEvaluation {
+    confusion: Confusion,
+    input: Confusion,
+    result: TrajectoryResult,
+    kept: Vec<(FrameId, Vec<u8>)>,
+    map: Option<Box<HostMap>>,
+}
+
+/// One trajectory through [`map_and_score`] with an S-NDT map: frames loaded one at a
+/// time, the input labels scored as they are mapped, back-projections written and kept as
+/// `options` asks, the final map saved and kept as asked.
+fn evaluate_trajectory(
+    dataset: &dyn Dataset,
+    name: &str,
+    ids: &[FrameId],
+    options: &EvalOptions,
+    progress: &(dyn Fn() + Sync),
+) -> Result<TrajectoryEvaluation> {
+    let mut map: Box<HostMap> = boxed_map(options.config).map_err(|e| anyhow!("config: {e:?}"))?;
+    let mut input = Confusion::default();
+    let mut kept = Vec::new();
+    let score = map_and_score(
+        map.as_mut(),
+        ids.iter().map(|id| dataset.load(id).map(Cow::Owned)),
+        options.labels,
+        options.stride,
+        &[()],
+        |frame| {
+            score_input(&mut input, frame, options.labels);
+            progress();
+            Ok(())
+        },
+        |frame, rendered| {
+            if let Some(out) = &options.out {
+                write_backprojection(out, frame, rendered)?;
+            }
+            if options.keep_frames.contains(&frame.id) {
+                kept.push((frame.id.clone(), rendered.to_vec()));
+            }
+            progress();
+            Ok(())
+        },
+    )?;
+    if let Some(dir) = &options.save_maps {
+        save_snapshot(
+            map.as_ref(),
+            &dir.join(format!("{}.sndt", name.replace('/', "_"))),
+        )?;
+    }
+    let stats = map.stats();
+    Ok(TrajectoryEvaluation {
+        confusion: score.confusions.into_iter().next().unwrap_or_default(),
+        input,
+        result: TrajectoryResult {
+            name: name.to_string(),
+            frames: ids.len(),
+            update_ms: score.update_ms,
+            voxels: map.len(),
+            blocks: map.block_count(),
+            evicted: stats.voxels_evicted,
+        },
+        kept,
+        map: options.keep_maps.then_some(map),
+    })
+}
+
+/// Scores the labels `source` feeds the map against the frame's ground truth, on the
+/// frame itself (the network alone, without mapping, for predictions).
+fn score_input(input: &mut Confusion, frame: &Frame, source: LabelSource) {
+    if let Some(gt) = &frame.labels {
+        let given: Vec<u8> = (0..frame.pixels())
+            .map(|i| frame.point_labels(i, source).classes[0])
+            .collect();
+        input.add_frame(gt, &given, &gt_depth(frame));
+    }
+}
+
+/// Writes a back-projection as a plain 8-bit PNG at `<out>/<scene>/<cam>/<NNNN>.png`, the
+/// layout of the authors' evaluate.py.
+fn write_backprojection(out: &Path, frame: &Frame, labels: &[u8]) -> Result<()> {
+    let path = out
+        .join(&frame.id.scene)
+        .join(&frame.id.cam)
+        .join(format!("{}.png", frame.id.stem()));
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    crate::dataset::prepared::write_gray8(&path, frame.rays.width(), frame.rays.height(), labels)
 }
 
 /// Writes a map snapshot file.
@@ -376,10 +361,9 @@ pub fn save_snapshot<const V: usize, const B: usize, const C: usize>(
 }
 
 /// Reads a map snapshot file into a heap map of the evaluation's capacity.
-pub fn load_snapshot(path: &std::path::Path) -> Result<Box<EvalMap>> {
+pub fn load_snapshot(path: &std::path::Path) -> Result<Box<HostMap>> {
     let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
-    let mut map: Box<EvalMap> =
-        crate::semantic_map::boxed_map(Config::DEFAULT).map_err(|e| anyhow!("{e:?}"))?;
+    let mut map: Box<HostMap> = boxed_map(Config::DEFAULT).map_err(|e| anyhow!("{e:?}"))?;
     map.read_snapshot(&bytes)
         .map_err(|e| anyhow!("{}: not a readable sndt snapshot: {e:?}", path.display()))?;
     Ok(map)

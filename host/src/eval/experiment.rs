@@ -1,8 +1,9 @@
 //! The paper's experiments in one call: S-NDT, S-BKI and OS-BKI on every trajectory of a
-//! dataset, per label source, cell size and kernel length, evaluated as DESIGN.md section
-//! 4 prescribes, written as the paper's Table I (mIoU / invR / mPAcc) and Table II (map
-//! update rate) in Markdown and CSV, with a per-class IoU chart like the paper's Fig. 5
-//! and an update-rate-vs-mIoU plot.
+//! dataset, per label source, cell size and kernel length, each evaluated by the same loop
+//! ([`map_and_score`], the paper's evaluation protocol in `docs/ARCHITECTURE.md`), written
+//! as the paper's Table I (mIoU / invR / mPAcc) and Table II (map update rate) in Markdown
+//! and CSV, with a per-class IoU chart like the paper's Fig. 5 and an update-rate-vs-mIoU
+//! plot.
 //!
 //! Each trajectory's frames are loaded once and every configuration is run on them in
 //! turn; trajectories run in parallel (rayon), each map is built by one thread, so update
@@ -12,15 +13,16 @@
 use crate::baselines::bki::{BkiConfig, BkiMap, Readout, SurfaceStates};
 use crate::dataset::frame::{Frame, LabelSource};
 use crate::dataset::source::Dataset;
-use crate::eval::evaluate::{backproject, integrate_frame};
+use crate::eval::evaluate::{gt_depth, map_and_score, MapScore};
 use crate::eval::metrics::{Confusion, Metrics};
+use crate::semantic_map::{boxed_map, HostMap, SemanticMap};
 use anyhow::{anyhow, bail, Context, Result};
 use rayon::prelude::*;
 use sndt_core::Config;
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 /// A mapping method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -82,7 +84,7 @@ impl Default for ExperimentOptions {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct RunKey {
     /// Ground truth or predicted labels.
-    pub labels: Labels,
+    pub labels: Segmentation,
     /// The method.
     pub method: Method,
     /// Kernel length in mm (0 for S-NDT).
@@ -101,35 +103,43 @@ impl RunKey {
     }
 }
 
-/// Label sources as an ordered key.
+/// The segmentation a map is fed, as an ordered key: the experiment's two label sources.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub enum Labels {
+pub enum Segmentation {
     /// Ground-truth segmentation.
     Gt,
     /// Predicted segmentation (top 1).
     Pred,
 }
 
-impl Labels {
-    fn from_source(s: LabelSource) -> Result<Labels> {
+impl Segmentation {
+    fn from_source(s: LabelSource) -> Result<Segmentation> {
         match s {
-            LabelSource::Gt => Ok(Labels::Gt),
-            LabelSource::Pred => Ok(Labels::Pred),
+            LabelSource::Gt => Ok(Segmentation::Gt),
+            LabelSource::Pred => Ok(Segmentation::Pred),
             other => bail!("experiment labels must be gt or pred, not {other:?}"),
+        }
+    }
+
+    /// The label source that feeds the maps.
+    fn source(self) -> LabelSource {
+        match self {
+            Segmentation::Gt => LabelSource::Gt,
+            Segmentation::Pred => LabelSource::Pred,
         }
     }
 
     fn title(self) -> &'static str {
         match self {
-            Labels::Gt => "GT segmentation",
-            Labels::Pred => "Predicted segmentation",
+            Segmentation::Gt => "GT segmentation",
+            Segmentation::Pred => "Predicted segmentation",
         }
     }
 
     fn tag(self) -> &'static str {
         match self {
-            Labels::Gt => "gt",
-            Labels::Pred => "pred",
+            Segmentation::Gt => "gt",
+            Segmentation::Pred => "pred",
         }
     }
 }
@@ -203,7 +213,7 @@ pub struct Experiment {
     /// Per configuration.
     pub runs: BTreeMap<RunKey, Run>,
     /// The labels fed to the maps, scored on the frames themselves (per label source).
-    pub inputs: BTreeMap<Labels, Confusion>,
+    pub inputs: BTreeMap<Segmentation, Confusion>,
     /// Frames per trajectory and trajectory count.
     pub frames: usize,
 }
@@ -229,10 +239,10 @@ pub fn run(
     options: &ExperimentOptions,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Experiment> {
-    let sources: Vec<Labels> = options
+    let sources: Vec<Segmentation> = options
         .labels
         .iter()
-        .map(|&s| Labels::from_source(s))
+        .map(|&s| Segmentation::from_source(s))
         .collect::<Result<_>>()?;
     if options.cells.is_empty() || options.methods.is_empty() || sources.is_empty() {
         bail!("nothing to run: give at least one cell size, method and label source");
@@ -304,116 +314,116 @@ fn bki_config(options: &ExperimentOptions, cell: f32, kernel: f32) -> BkiConfig 
 /// read-out), the input labels' confusion per source, and the frame count.
 type TrajectoryRuns = (
     Vec<(RunKey, Confusion, f64, SurfaceStates)>,
-    Vec<(Labels, Confusion)>,
+    Vec<(Segmentation, Confusion)>,
     usize,
 );
 
-/// One trajectory through every configuration.
+/// One trajectory through every configuration: per segmentation, its input labels scored,
+/// then per cell size S-NDT and, per kernel length, one BKI map read out as S-BKI and / or
+/// OS-BKI.
 fn run_trajectory(
     frames: &[Frame],
     options: &ExperimentOptions,
-    sources: &[Labels],
+    sources: &[Segmentation],
     bki_methods: &[Method],
     progress: &(dyn Fn() + Sync),
 ) -> Result<TrajectoryRuns> {
-    let gt_depths: Vec<Vec<f32>> = frames.iter().map(crate::eval::evaluate::gt_depth).collect();
-    let score = |pred: &[u8], i: usize, c: &mut Confusion| {
-        if let Some(gt) = &frames[i].labels {
-            c.add_frame(gt, pred, &gt_depths[i]);
-        }
-    };
+    let readouts: Vec<Readout> = bki_methods.iter().map(|&m| bki_readout(m)).collect();
     let mut runs = Vec::new();
     let mut inputs = Vec::new();
-    for &labels in sources {
-        // The frames as fed to the maps: `labels` holds the chosen input labels.
-        let fed: Vec<Frame> = frames
-            .iter()
-            .map(|f| -> Result<Frame> {
-                let input = match labels {
-                    Labels::Gt => f.labels.clone(),
-                    Labels::Pred => Some(
-                        f.predictions
-                            .as_ref()
-                            .ok_or_else(|| anyhow!("{}: no predictions to map with", f.id))?
-                            .top1(),
-                    ),
-                };
-                Ok(Frame {
-                    labels: input,
-                    predictions: None,
-                    ..f.clone()
-                })
-            })
-            .collect::<Result<_>>()?;
-        let mut input = Confusion::default();
-        for (i, f) in fed.iter().enumerate() {
-            if let Some(l) = &f.labels {
-                score(l, i, &mut input);
-            }
-        }
-        inputs.push((labels, input));
+    for &segmentation in sources {
+        inputs.push((segmentation, input_confusion(frames, segmentation)?));
+        let labels = segmentation.source();
         for &cell in &options.cells {
+            let key = |method, kernel_mm| RunKey {
+                labels: segmentation,
+                method,
+                kernel_mm,
+                cell_mm: mm(cell),
+            };
             if options.methods.contains(&Method::Sndt) {
-                let config = sndt_config(options, cell);
-                let mut map: Box<crate::eval::evaluate::EvalMap> =
-                    crate::semantic_map::boxed_map(config).map_err(|e| anyhow!("config: {e:?}"))?;
-                let mut seconds = 0.0;
-                for f in &fed {
-                    let t = Instant::now();
-                    integrate_frame(map.as_mut(), f, LabelSource::Gt, 1)?;
-                    seconds += t.elapsed().as_secs_f64();
-                    progress();
+                let mut map: Box<HostMap> =
+                    boxed_map(sndt_config(options, cell)).map_err(|e| anyhow!("config: {e:?}"))?;
+                let score = run_map(map.as_mut(), frames, labels, &[()], progress)?;
+                let seconds = score.update_seconds();
+                for confusion in score.confusions {
+                    runs.push((key(Method::Sndt, 0), confusion, seconds, Default::default()));
                 }
-                let mut confusion = Confusion::default();
-                for (i, f) in frames.iter().enumerate() {
-                    score(&backproject(map.as_ref(), f)?, i, &mut confusion);
-                    progress();
-                }
-                let key = RunKey {
-                    labels,
-                    method: Method::Sndt,
-                    kernel_mm: 0,
-                    cell_mm: mm(cell),
-                };
-                runs.push((key, confusion, seconds, SurfaceStates::default()));
             }
             for &l in &options.kernels {
-                if bki_methods.is_empty() {
+                if readouts.is_empty() {
                     break;
                 }
-                let config = bki_config(options, cell, l);
-                let mut map = BkiMap::new(config)?;
-                let mut seconds = 0.0;
-                for f in &fed {
-                    let t = Instant::now();
-                    map.integrate(f, f.labels.as_deref())?;
-                    seconds += t.elapsed().as_secs_f64();
-                    progress();
-                }
-                for &m in bki_methods {
-                    let readout = if m == Method::Sbki {
-                        Readout::Sbki
-                    } else {
-                        Readout::Osbki
-                    };
-                    let grid = map.label_grid(readout);
-                    let mut confusion = Confusion::default();
-                    for (i, f) in frames.iter().enumerate() {
-                        score(&grid.render(f, config.max_range), i, &mut confusion);
-                        progress();
-                    }
-                    let key = RunKey {
-                        labels,
-                        method: m,
-                        kernel_mm: mm(l),
-                        cell_mm: mm(cell),
-                    };
-                    runs.push((key, confusion, seconds, map.surface_states(readout)));
+                let mut map = BkiMap::new(bki_config(options, cell, l))?;
+                let score = run_map(&mut map, frames, labels, &readouts, progress)?;
+                let seconds = score.update_seconds();
+                for ((&m, &readout), confusion) in
+                    bki_methods.iter().zip(&readouts).zip(score.confusions)
+                {
+                    let surface = map.surface_states(readout);
+                    runs.push((key(m, mm(l)), confusion, seconds, surface));
                 }
             }
         }
     }
     Ok((runs, inputs, frames.len()))
+}
+
+/// One configuration's map through the trajectory ([`map_and_score`], every pixel), one
+/// progress step per frame mapped and per frame rendered.
+fn run_map<M: SemanticMap + ?Sized>(
+    map: &mut M,
+    frames: &[Frame],
+    labels: LabelSource,
+    readouts: &[M::Readout],
+    progress: &(dyn Fn() + Sync),
+) -> Result<MapScore> {
+    map_and_score(
+        map,
+        frames.iter().map(|f| Ok(Cow::Borrowed(f))),
+        labels,
+        1,
+        readouts,
+        |_| {
+            progress();
+            Ok(())
+        },
+        |_, _| {
+            progress();
+            Ok(())
+        },
+    )
+}
+
+/// The BKI read-out of a BKI method.
+fn bki_readout(method: Method) -> Readout {
+    if method == Method::Sbki {
+        Readout::Sbki
+    } else {
+        Readout::Osbki
+    }
+}
+
+/// The labels `segmentation` feeds the maps (ground truth, or the prediction's top 1),
+/// scored against the ground truth on the frames themselves. Predicted segmentation needs
+/// predictions on every frame.
+fn input_confusion(frames: &[Frame], segmentation: Segmentation) -> Result<Confusion> {
+    let mut input = Confusion::default();
+    for f in frames {
+        let given = match segmentation {
+            Segmentation::Gt => f.labels.clone(),
+            Segmentation::Pred => Some(
+                f.predictions
+                    .as_ref()
+                    .ok_or_else(|| anyhow!("{}: no predictions to map with", f.id))?
+                    .top1(),
+            ),
+        };
+        if let (Some(gt), Some(given)) = (&f.labels, &given) {
+            input.add_frame(gt, given, &gt_depth(f));
+        }
+    }
+    Ok(input)
 }
 
 impl Experiment {
@@ -425,8 +435,8 @@ impl Experiment {
     }
 
     /// Rows of a table: (label source, method, kernel) in the paper's order.
-    fn rows(&self) -> Vec<(Labels, Method, u32)> {
-        let mut r: Vec<(Labels, Method, u32)> = self
+    fn rows(&self) -> Vec<(Segmentation, Method, u32)> {
+        let mut r: Vec<(Segmentation, Method, u32)> = self
             .runs
             .keys()
             .map(|k| (k.labels, k.method, k.kernel_mm))
@@ -583,7 +593,7 @@ impl Experiment {
         rows.dedup();
         for (method, kernel) in rows {
             let key = RunKey {
-                labels: Labels::Gt,
+                labels: Segmentation::Gt,
                 method,
                 kernel_mm: kernel,
                 cell_mm: 0,
@@ -644,7 +654,7 @@ impl Experiment {
             "results.json",
             &serde_json::to_string_pretty(&self.to_json())?,
         )?;
-        let sources: Vec<Labels> = self.inputs.keys().cloned().collect();
+        let sources: Vec<Segmentation> = self.inputs.keys().cloned().collect();
         for labels in sources {
             let p = out.join(format!("iou_{}.svg", labels.tag()));
             let series = self.fig5_series(labels);
@@ -684,7 +694,7 @@ impl Experiment {
 
     /// The Fig. 5 series: S-BKI and OS-BKI at 10 cm with a 30 cm kernel, S-NDT at 10 and
     /// 15 cm (nearest available cell sizes and kernel otherwise).
-    fn fig5_series(&self, labels: Labels) -> Vec<(String, [Option<f64>; 41])> {
+    fn fig5_series(&self, labels: Segmentation) -> Vec<(String, [Option<f64>; 41])> {
         let cells = self.cells();
         let nearest = |v: &[u32], want: u32| v.iter().cloned().min_by_key(|&c| c.abs_diff(want));
         let mut kernels: Vec<u32> = self

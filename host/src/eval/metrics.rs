@@ -1,11 +1,12 @@
-//! The paper's evaluation (DESIGN.md section 4, the authors' evaluate.py): one 42x42
+//! The paper's evaluation protocol, as the authors' evaluate.py computes it: one 42x42
 //! confusion matrix over all frames, void ignored, invalid predictions counted against
-//! recall, mIoU / mPAcc / invR.
+//! recall, mIoU / mPAcc / invR (`docs/ARCHITECTURE.md`, evaluation protocol).
 
-/// Number of rows/columns: 0 void, 1..=40 classes, 41 invalid.
-pub const BINS: usize = 42;
-/// Column of invalid predictions (free space / nothing hit; rendered as 255).
-pub const INVALID: usize = 41;
+/// Side of the confusion matrix: rows and columns 0 void, 1..=40 classes, 41 invalid.
+pub const CONFUSION_SIDE: usize = 42;
+/// Column of invalid predictions: every rendered label above 40, i.e.
+/// [`sndt_core::INVALID_LABEL`] (nothing hit), is counted here.
+pub const INVALID_COLUMN: usize = 41;
 /// Pixels whose ground-truth depth is this far or farther are not counted (metres).
 pub const MAX_GT_DEPTH: f32 = 20.0;
 
@@ -13,13 +14,13 @@ pub const MAX_GT_DEPTH: f32 = 20.0;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Confusion {
     /// Row = ground truth (0 void, 1..=40), column = prediction (0..=40, 41 invalid).
-    pub cm: Box<[[u64; BINS]; BINS]>,
+    pub cm: Box<[[u64; CONFUSION_SIDE]; CONFUSION_SIDE]>,
 }
 
 impl Default for Confusion {
     fn default() -> Self {
         Confusion {
-            cm: Box::new([[0; BINS]; BINS]),
+            cm: Box::new([[0; CONFUSION_SIDE]; CONFUSION_SIDE]),
         }
     }
 }
@@ -82,7 +83,7 @@ impl Confusion {
                 continue;
             }
             let g = if g as usize > 40 { 0 } else { g as usize };
-            let p = (p as usize).min(INVALID);
+            let p = (p as usize).min(INVALID_COLUMN);
             self.cm[g][p] += 1;
         }
     }
@@ -106,7 +107,7 @@ impl Confusion {
             let tp = cm[c][c];
             let gt: u64 = cm[c].iter().sum();
             let pred: u64 = (1..=40).map(|g| cm[g][c]).sum();
-            inv += cm[c][INVALID];
+            inv += cm[c][INVALID_COLUMN];
             gt_all += gt;
             if gt == 0 {
                 continue;
