@@ -1,6 +1,7 @@
 //! The f64 reference S-NDT (`sndt_host::reference`) against hand calculations, and the
-//! core against the reference within the stated tolerances (`TOLERANCES`, docs/ARCHITECTURE.md) on a fixed synthetic
-//! trajectory at 10 cm.
+//! core against the reference within `sndt_host::eval::compare::TOLERANCES` on a fixed
+//! synthetic trajectory at 10 cm (`docs/ARCHITECTURE.md`, the f64 reference and
+//! tolerances).
 
 use sndt_core::{
     Config, Isometry3, LabeledPoint, Labels, Map, MissModel, Pinhole, Point3, VoxelKey,
@@ -256,7 +257,7 @@ fn histogram_halving_by_hand() {
     assert_eq!(c.class(), Some((1, 96.0 / 166.0)));
 }
 
-/// The tolerances on a fixed synthetic trajectory (living room, 20 frames of
+/// `TOLERANCES` on a fixed synthetic trajectory (living room, 20 frames of
 /// 256x192, exact depth, ground-truth labels) at 10 cm. If this fails, fix the core, never
 /// the thresholds.
 #[test]

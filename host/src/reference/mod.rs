@@ -1,9 +1,10 @@
 //! The f64 reference S-NDT: the yardstick for the core's integer statistics.
 //!
-//! [`RefMap`] implements the S-NDT map in plain `f64` maths with std
-//! collections: no quantisation, no fixed-point log-odds, no capacity limit. It is written
-//! from the design, not by calling `sndt_core`'s update code; it shares only [`Config`]
-//! (so both sides use the same parameters) and the voxel-key convention (a world point `p`
+//! [`RefMap`] implements the S-NDT map in plain `f64` maths with std collections: no
+//! quantisation, no fixed-point log-odds, no capacity limit. It is written from the
+//! method's description, not by calling `sndt_core`'s update code; it shares only
+//! [`Config`](sndt_core::Config) (so both sides use the same parameters), the
+//! vote-sampling functions and the voxel-key convention (a world point `p`
 //! in `f32`, computed from the sensor point as the core does, lies in voxel
 //! `floor(p * (1 / h))`, see [`sndt_core::VoxelKey::from_point`]), so that both maps assign
 //! every point to the same voxel and differences measure the core's arithmetic only.

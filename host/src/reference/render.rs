@@ -29,8 +29,8 @@ pub(super) struct Renderable {
     pub(super) class: u8,
 }
 
-/// The renderable voxels of a [`RefMap`] (occupied, `n >= n_min`) with their prepared
-/// Gaussians: ray casting and rendering in `f64`.
+/// The renderable voxels of a [`RefMap`](crate::reference::map::RefMap) (occupied,
+/// `n >= n_min`) with their prepared Gaussians: ray casting and rendering in `f64`.
 ///
 /// ```
 /// use sndt_host::reference::RefMap;
