@@ -8,6 +8,10 @@ pub const MAX_TOP_K: usize = 3;
 /// Top-k labels of one point: NYU40-style class ids `1..=CLASSES` (0 = void, which adds
 /// geometry but no vote) with optional scores (0..=255, 255 when unknown).
 ///
+/// A plain `Copy` struct of two arrays and a length rather than a `heapless::Vec`: points
+/// are copied by value in bulk (slices of [`LabeledPoint`]) and the layout stays 7 fixed
+/// bytes; the vote step, which builds a list, uses `heapless::Vec` for its voting classes.
+///
 /// ```
 /// use sndt_core::Labels;
 /// let l = Labels::top_k(&[(5, 200), (7, 40)]);

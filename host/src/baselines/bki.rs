@@ -35,7 +35,7 @@ use anyhow::{bail, Result};
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
-use sndt_core::INVALID_LABEL;
+use sndt_core::{validate_pose, INVALID_LABEL};
 
 /// Dirichlet counts per voxel: free, classes 1..=40, hits without a class (void).
 pub const COUNT_BINS: usize = 42;
@@ -283,28 +283,22 @@ impl BkiMap {
             }
         }
         let pose = &frame.pose;
-        let t = pose.translation.vector;
-        if !t
-            .iter()
-            .chain(pose.rotation.coords.iter())
-            .all(|x| x.is_finite())
-        {
-            bail!("{}: pose is not finite", frame.id);
+        if validate_pose(pose).is_err() {
+            bail!(
+                "{}: pose is not finite or its rotation is not unit",
+                frame.id
+            );
         }
+        let t = pose.translation.vector;
         let origin = [t.x, t.y, t.z];
-        let w = frame.rays.width();
         let max2 = self.config.max_range * self.config.max_range;
         let mut hits = Downsampler::new(self.config.ds_resolution);
         let mut n_hits = 0;
-        for i in 0..frame.pixels() {
-            let Some(z) = frame.planar_depth(i) else {
-                continue;
-            };
-            let r = frame.rays.ray(i as u32 % w, i as u32 / w);
-            let p = pose * Point3::new(r[0] * z, r[1] * z, z);
+        frame.for_each_camera_point(1, |i, p| {
+            let p = pose * Point3::from(p);
             let d = Vector3::new(p.x - origin[0], p.y - origin[1], p.z - origin[2]);
             if d.norm_squared() > max2 || !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()) {
-                continue;
+                return;
             }
             let bin = match labels.map_or(0, |l| l[i]) {
                 0 => UNCLASSIFIED,
@@ -312,7 +306,7 @@ impl BkiMap {
             };
             hits.add([p.x, p.y, p.z], bin);
             n_hits += 1;
-        }
+        });
         let hit_samples = hits.samples();
         let free = free_samples(&origin, &hit_samples, self.config);
         for s in hit_samples.iter().chain(&free) {

@@ -11,7 +11,9 @@
 //! - labels: `0` void, `1..=40` NYU40.
 
 use anyhow::{bail, Context, Result};
-use sndt_core::{DepthKind, Isometry3, LabeledPoint, Labels, Pinhole, Point3};
+use sndt_core::{
+    depth_point, validate_pose, DepthKind, Isometry3, LabeledPoint, Labels, Pinhole, Point3,
+};
 use std::fmt;
 use std::sync::Arc;
 
@@ -180,20 +182,35 @@ impl Frame {
         self.depth.len()
     }
 
+    /// The measured point of pixel `i` in the camera frame, or `None` without a
+    /// measurement: the core's [`depth_point`] along the pixel's ray, so the host and the
+    /// core turn a pixel into the same point bit for bit.
+    pub fn camera_point(&self, i: usize) -> Option<[f32; 3]> {
+        let w = self.rays.width();
+        let ray = self.rays.ray(i as u32 % w, i as u32 / w);
+        depth_point(ray, self.depth[i], self.depth_kind)
+    }
+
     /// Planar depth (z in the camera frame) of pixel `i`, or `None` without a measurement.
     pub fn planar_depth(&self, i: usize) -> Option<f32> {
-        let d = self.depth[i];
-        if !(d.is_finite() && d > 0.0) {
-            return None;
-        }
-        Some(match self.depth_kind {
-            DepthKind::Planar => d,
-            DepthKind::Range => {
-                let w = self.rays.width();
-                let r = self.rays.ray(i as u32 % w, i as u32 / w);
-                d / (r[0] * r[0] + r[1] * r[1] + 1.0).sqrt()
+        self.camera_point(i).map(|p| p[2])
+    }
+
+    /// Calls `visit(i, point)` for every measured pixel `i` (row-major, every `stride`-th
+    /// pixel in both directions, `stride` 0 taken as 1) with its camera-frame point.
+    pub fn for_each_camera_point(&self, stride: u32, mut visit: impl FnMut(usize, [f32; 3])) {
+        let (w, h) = (self.rays.width(), self.rays.height());
+        let stride = stride.max(1) as usize;
+        for row in (0..h).step_by(stride) {
+            for col in (0..w).step_by(stride) {
+                let i = (row * w + col) as usize;
+                if let Some(p) =
+                    depth_point(self.rays.ray(col, row), self.depth[i], self.depth_kind)
+                {
+                    visit(i, p);
+                }
             }
-        })
+        }
     }
 
     /// Planar depth image (0 where there is no measurement), as the evaluation's GT mask
@@ -226,44 +243,31 @@ impl Frame {
     /// Measured points in the camera frame with labels from `source`, every `stride`-th
     /// pixel in both directions.
     pub fn camera_points(&self, source: LabelSource, stride: u32) -> Vec<LabeledPoint> {
-        let (w, h) = (self.rays.width(), self.rays.height());
         let stride = stride.max(1);
         let mut out = Vec::with_capacity(self.pixels() / (stride * stride) as usize);
-        for row in (0..h).step_by(stride as usize) {
-            for col in (0..w).step_by(stride as usize) {
-                let i = (row * w + col) as usize;
-                if let Some(z) = self.planar_depth(i) {
-                    let r = self.rays.ray(col, row);
-                    out.push(LabeledPoint::new(
-                        Point3::new(r[0] * z, r[1] * z, z),
-                        self.point_labels(i, source),
-                    ));
-                }
-            }
-        }
+        self.for_each_camera_point(stride, |i, p| {
+            out.push(LabeledPoint::new(
+                Point3::from(p),
+                self.point_labels(i, source),
+            ));
+        });
         out
     }
 
     /// Measured points in world coordinates with their ground-truth label (0 when the
     /// frame has none), every pixel.
     pub fn world_points(&self) -> Vec<([f32; 3], u8)> {
-        let (w, h) = (self.rays.width(), self.rays.height());
         let mut out = Vec::with_capacity(self.pixels());
-        for row in 0..h {
-            for col in 0..w {
-                let i = (row * w + col) as usize;
-                if let Some(z) = self.planar_depth(i) {
-                    let r = self.rays.ray(col, row);
-                    let p = self.pose * Point3::new(r[0] * z, r[1] * z, z);
-                    let l = self.labels.as_ref().map_or(0, |l| l[i]);
-                    out.push(([p.x, p.y, p.z], l));
-                }
-            }
-        }
+        self.for_each_camera_point(1, |i, p| {
+            let p = self.pose * Point3::from(p);
+            let l = self.labels.as_ref().map_or(0, |l| l[i]);
+            out.push(([p.x, p.y, p.z], l));
+        });
         out
     }
 
-    /// Checks shapes and values: image sizes agree, the pose is finite, labels are
+    /// Checks shapes and values: image sizes agree, the pose passes the core's
+    /// [`validate_pose`] (finite, unit rotation), labels are
     /// 0..=40. Readers call this so that a bad file fails where it is read.
     pub fn validate(&self) -> Result<()> {
         let n = self.rays.width() as usize * self.rays.height() as usize;
@@ -296,10 +300,11 @@ impl Frame {
                 );
             }
         }
-        let t = self.pose.translation.vector;
-        let q = self.pose.rotation.coords;
-        if t.iter().chain(q.iter()).any(|x| !x.is_finite()) {
-            bail!("{}: pose is not finite", self.id);
+        if validate_pose(&self.pose).is_err() {
+            bail!(
+                "{}: pose is not finite or its rotation is not unit",
+                self.id
+            );
         }
         Ok(())
     }

@@ -313,13 +313,8 @@ impl RefMap {
 
     /// Step 0: the sensor origin and its voxel, or the error that leaves the map untouched.
     fn validate_pose(&self, pose: &Isometry3<f32>) -> Result<([f32; 3], Key), Error> {
+        sndt_core::validate_pose(pose)?;
         let t = pose.translation.vector;
-        let q = pose.rotation.quaternion();
-        if !t.iter().chain(q.coords.iter()).all(|x| x.is_finite())
-            || (q.norm_squared() - 1.0).abs() > 1e-3
-        {
-            return Err(Error::InvalidPose);
-        }
         let origin = [t.x, t.y, t.z];
         Ok((origin, self.key(&origin).ok_or(Error::PoseOutOfRange)?))
     }
