@@ -8,7 +8,7 @@
 //! run) and added to the voxel once. A point votes if its labels do and the voxel's vote
 //! sample takes it. Points beyond max range only mark their truncated ray end (`far`).
 
-use crate::frame::FrameState;
+use crate::frame::{accumulator_index, Accumulator, FrameState};
 use crate::key::{axis_key, VoxelKey};
 use crate::labels::Labels;
 use crate::map::Map;
@@ -42,7 +42,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             f.report.dropped_points += 1;
             return;
         };
-        self.add_to_run(f, vs, q);
+        self.accumulate_point(f, vs, key.packed(), q);
         let classes = voting_classes(labels, &self.config);
         if !classes.is_empty() {
             self.voxels.slots[vs].vote(&p, &classes);
@@ -53,7 +53,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// The slot of the voxel `key` for a point of this frame: through the frame's caches,
     /// or set up by [`Map::first_point`]. `None` when the map is full.
     #[inline]
-    fn point_voxel(&mut self, f: &mut FrameState, key: &VoxelKey) -> Option<usize> {
+    pub(crate) fn point_voxel(&mut self, f: &mut FrameState, key: &VoxelKey) -> Option<usize> {
         let packed_block = key.block();
         let bs = if f.block_cache.0 == packed_block {
             f.block_cache.1
@@ -94,27 +94,48 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         Some(vs)
     }
 
-    /// Adds a point's offset to the run of voxel slot `vs`; a point in another voxel than
-    /// the run's first adds the run to its voxel.
+    /// Adds a point's offset to the accumulator of voxel slot `vs` (packed key `key`).
     #[inline]
-    fn add_to_run(&mut self, f: &mut FrameState, vs: usize, q: [i32; 3]) {
-        if f.run_slot != vs {
-            self.flush_run(f);
-            f.run_slot = vs;
+    fn accumulate_point(&mut self, f: &mut FrameState, vs: usize, key: u64, q: [i32; 3]) {
+        let a = accumulator_index(key);
+        if f.acc[a].key != key {
+            self.open_accumulator(f, a, vs, key);
         }
-        f.run.add(q);
+        f.acc[a].sums.add(q);
     }
 
-    /// Adds the pending run of points (consecutive points in one voxel, summed in
-    /// registers) to its voxel. Integer sums make this exact.
-    pub(crate) fn flush_run(&mut self, f: &mut FrameState) {
-        if f.run.n > 0 {
-            if let Some(v) = self.voxels.slots.get_mut(f.run_slot) {
-                v.merge(&f.run);
+    /// Makes accumulator `a` hold voxel slot `vs` (packed key `key`), adding the points
+    /// of the voxel it held to that voxel.
+    #[inline]
+    pub(crate) fn open_accumulator(&mut self, f: &mut FrameState, a: usize, vs: usize, key: u64) {
+        let Some(acc) = f.acc.get_mut(a) else {
+            return;
+        };
+        self.flush(acc);
+        *acc = Accumulator {
+            sums: PointSums::EMPTY,
+            slot: vs,
+            key,
+            vote_exponent: self.voxels.slots.get(vs).map_or(0, Voxel::vote_exponent),
+        };
+    }
+
+    /// Adds every open accumulator to its voxel.
+    pub(crate) fn flush_accumulators(&mut self, f: &mut FrameState) {
+        for acc in f.acc.iter_mut() {
+            self.flush(acc);
+        }
+    }
+
+    /// Adds an accumulator's points to its voxel and empties it.
+    #[inline]
+    fn flush(&mut self, acc: &mut Accumulator) {
+        if acc.sums.n > 0 {
+            if let Some(v) = self.voxels.slots.get_mut(acc.slot) {
+                v.merge(&acc.sums);
             }
         }
-        f.run = PointSums::EMPTY;
-        f.run_slot = usize::MAX;
+        *acc = Accumulator::NONE;
     }
 
     /// A point at world position `w`, `range` metres from the sensor, beyond max range:

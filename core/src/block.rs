@@ -96,6 +96,7 @@ impl Block {
 }
 
 /// Indices of the set bits of a cell mask, lowest first.
+#[inline]
 pub(crate) fn bits(mut mask: u64) -> impl Iterator<Item = u32> {
     core::iter::from_fn(move || {
         if mask == 0 {

@@ -136,7 +136,7 @@ pub fn depth_point(ray: [f32; 3], depth: f32, kind: DepthKind) -> Option<[f32; 3
 /// computed once per image. [`Pinhole::ray`] divides instead, which differs in the last bit
 /// for some pixels; each path keeps its own arithmetic because maps (snapshot CRCs) and
 /// renders are compared bit for bit across versions and targets.
-struct PixelRays {
+pub(crate) struct PixelRays {
     ifx: f32,
     ify: f32,
     cx: f32,
@@ -144,7 +144,7 @@ struct PixelRays {
 }
 
 impl PixelRays {
-    fn new(cam: &Pinhole) -> Self {
+    pub(crate) fn new(cam: &Pinhole) -> Self {
         PixelRays {
             ifx: 1.0 / cam.fx,
             ify: 1.0 / cam.fy,
@@ -155,14 +155,14 @@ impl PixelRays {
 
     /// The y component of every ray in image row `row`.
     #[inline]
-    fn y(&self, row: usize) -> f32 {
+    pub(crate) fn y(&self, row: usize) -> f32 {
         (row as f32 + 0.5 - self.cy) * self.ify
     }
 
-    /// The ray of pixel `col` in a row whose rays have y component `y`.
+    /// The x component of every ray in image column `col` (a `u32`, as image sizes are).
     #[inline]
-    fn ray(&self, col: usize, y: f32) -> [f32; 3] {
-        [(col as f32 + 0.5 - self.cx) * self.ifx, y, 1.0]
+    pub(crate) fn x(&self, col: usize) -> f32 {
+        (col as u32 as f32 + 0.5 - self.cx) * self.ifx
     }
 }
 
@@ -183,42 +183,12 @@ impl DepthImage<'_> {
         Ok(())
     }
 
-    /// Pixels [`DepthImage::for_each_point`] visits (of a validated image).
+    /// Pixels integration visits (of a validated image): every `stride`-th in both
+    /// directions.
     pub(crate) fn samples(&self) -> usize {
         let stride = self.stride as usize;
         let (w, h) = (self.camera.width as usize, self.camera.height as usize);
         w.div_ceil(stride) * h.div_ceil(stride)
-    }
-
-    /// The labels of pixel `i`.
-    #[inline]
-    fn labels_at(&self, i: usize) -> Labels {
-        match self.labels {
-            LabelImage::None => Labels::NONE,
-            LabelImage::Top1(l) => Labels::top1(l[i]),
-            LabelImage::TopK(l) => l[i],
-        }
-    }
-
-    /// Calls `visit` with every valid pixel's point (sensor frame) and labels, in row-major
-    /// order at the image's stride; returns how many pixels had an invalid depth.
-    pub(crate) fn for_each_point(&self, mut visit: impl FnMut([f32; 3], Labels)) -> u32 {
-        let cam = &self.camera;
-        let stride = self.stride as usize;
-        let (w, h) = (cam.width as usize, cam.height as usize);
-        let rays = PixelRays::new(cam);
-        let mut invalid = 0;
-        for row in (0..h).step_by(stride) {
-            let y = rays.y(row);
-            for col in (0..w).step_by(stride) {
-                let i = row * w + col;
-                match depth_point(rays.ray(col, y), self.depth[i], self.kind) {
-                    Some(p) => visit(p, self.labels_at(i)),
-                    None => invalid += 1,
-                }
-            }
-        }
-        invalid
     }
 }
 

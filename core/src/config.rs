@@ -187,6 +187,7 @@ pub const LOGODDS_ONE: f32 = 1024.0;
 
 /// Converts natural log-odds to the map's fixed point (round to nearest), clamped to
 /// +-64 so that adding it to an `i16` cell in `i32` can never overflow (NaN gives 0).
+#[inline]
 pub(crate) fn to_fixed(l: f32) -> i32 {
     let l = if l.is_nan() {
         0.0

@@ -51,6 +51,77 @@ pub struct FrameReport {
     pub blocks_evicted: u32,
 }
 
+/// A step of a frame's integration, reported at its start to the observer of
+/// [`Map::integrate_depth_observed`] and [`Map::integrate_observed`] (for example to time
+/// the steps: the time until the next report belongs to this step).
+///
+/// Phase 1 alternates between [`Phase::Points`] and [`Phase::Accumulate`] once per batch
+/// of up to 128 points; the other phases are reported once per frame.
+///
+/// ```
+/// use sndt_core::{Config, Isometry3, LabeledPoint, Labels, Map, Phase, Point3};
+/// let mut map: Map<64, 16, 4> = Map::new(Config::DEFAULT);
+/// let pts = [LabeledPoint::new(Point3::new(0.0, 0.0, 1.0), Labels::top1(1))];
+/// let mut seen = Vec::new();
+/// map.integrate_observed(&Isometry3::identity(), &pts, |p| seen.push(p)).unwrap();
+/// assert_eq!(
+///     seen,
+///     [Phase::Points, Phase::Accumulate, Phase::EndVoxels, Phase::FreeSpace, Phase::Done]
+/// );
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Phase {
+    /// Phase 1, conversion: pixels to points, world coordinates, voxel keys and offsets.
+    Points,
+    /// Phase 1, accumulation: voxel lookup, integer sums and votes.
+    Accumulate,
+    /// Phase 2: one update per touched voxel (decay, hit, next vote sampling).
+    EndVoxels,
+    /// Phase 3: rays to the unique end voxels, misses.
+    FreeSpace,
+    /// The frame is complete.
+    Done,
+}
+
+/// Open voxel accumulators per frame (see [`Accumulator`]).
+pub(crate) const ACCUMULATORS: usize = 64;
+
+/// The points a frame put into one voxel so far, summed on the stack and added to the
+/// voxel when the accumulator is needed for another voxel or the frame's points end
+/// (integer sums: the same result as adding point by point, in any grouping).
+///
+/// Accumulators are indexed by the low two bits of each key component
+/// ([`accumulator_index`]), so the voxels of any 4x4x4 neighbourhood never compete: a
+/// surface that straddles a voxel boundary sends consecutive pixels back and forth
+/// between voxels, and each of them keeps its accumulator.
+#[derive(Clone, Copy)]
+pub(crate) struct Accumulator {
+    pub(crate) sums: PointSums,
+    /// The voxel's slot.
+    pub(crate) slot: usize,
+    /// The voxel's packed key (0, never a valid key, when unused).
+    pub(crate) key: u64,
+    /// The voxel's vote-sampling exponent (fixed during a frame).
+    pub(crate) vote_exponent: u8,
+}
+
+impl Accumulator {
+    /// An unused accumulator.
+    pub(crate) const NONE: Accumulator = Accumulator {
+        sums: PointSums::EMPTY,
+        slot: usize::MAX,
+        key: 0,
+        vote_exponent: 0,
+    };
+}
+
+/// The accumulator of a packed voxel key: its cell index in a 4x4x4 block.
+#[inline]
+pub(crate) fn accumulator_index(key: u64) -> usize {
+    ((key & 0x3) | ((key >> 14) & 0xc) | ((key >> 28) & 0x30)) as usize
+}
+
 /// Per-frame state; lives on the stack during one integration.
 pub(crate) struct FrameState {
     pub(crate) rot: Matrix3<f32>,
@@ -73,9 +144,8 @@ pub(crate) struct FrameState {
     pub(crate) head: u32,
     pub(crate) block_cache: (u64, usize),
     pub(crate) voxel_cache: (u64, usize),
-    /// Points of the current run, and the slot of the voxel they are in.
-    pub(crate) run: PointSums,
-    pub(crate) run_slot: usize,
+    /// Open voxel accumulators of phase 1.
+    pub(crate) acc: [Accumulator; ACCUMULATORS],
     pub(crate) voxels_exhausted: bool,
     pub(crate) blocks_exhausted: bool,
     pub(crate) report: FrameReport,
@@ -152,8 +222,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             head: NIL,
             block_cache: (0, 0),
             voxel_cache: (0, 0),
-            run: PointSums::EMPTY,
-            run_slot: usize::MAX,
+            acc: [Accumulator::NONE; ACCUMULATORS],
             voxels_exhausted: false,
             blocks_exhausted: false,
             report: FrameReport::default(),

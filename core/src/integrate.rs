@@ -16,13 +16,14 @@
 //! Phase 1 only adds to integer sums and sets per-frame masks, and phases 2 and 3 go in
 //! key order, so the result does not depend on point order.
 
+use crate::batch::{Batch, BATCH};
 use crate::block::bits;
-use crate::camera::DepthImage;
+use crate::camera::{DepthImage, LabelImage, PixelRays};
 use crate::config::to_fixed;
 use crate::error::Error;
-use crate::frame::{FrameReport, FrameState, MAX_FRAME_POINTS};
+use crate::frame::{FrameReport, FrameState, Phase, MAX_FRAME_POINTS};
 use crate::key::VoxelKey;
-use crate::labels::LabeledPoint;
+use crate::labels::{LabeledPoint, Labels};
 use crate::map::Map;
 use crate::table::{Entry, NIL};
 use nalgebra::Isometry3;
@@ -51,15 +52,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         pose: &Isometry3<f32>,
         points: &[LabeledPoint],
     ) -> Result<FrameReport, Error> {
-        if points.len() > MAX_FRAME_POINTS {
-            return Err(Error::FrameTooLarge);
-        }
-        let mut f = self.begin_frame(pose)?;
-        for p in points {
-            let q = [p.position.x, p.position.y, p.position.z];
-            self.add_point(&mut f, q, &p.labels);
-        }
-        Ok(self.finish(f))
+        self.integrate_observed(pose, points, |_| {})
     }
 
     /// Integrates a depth image with labels (see [`DepthImage`]); invalid depths are
@@ -69,22 +62,117 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         pose: &Isometry3<f32>,
         image: &DepthImage<'_>,
     ) -> Result<FrameReport, Error> {
+        self.integrate_depth_observed(pose, image, |_| {})
+    }
+
+    /// [`Map::integrate`], reporting the start of every [`Phase`] to `on_phase` (for
+    /// example to time them; the map is the same).
+    pub fn integrate_observed(
+        &mut self,
+        pose: &Isometry3<f32>,
+        points: &[LabeledPoint],
+        mut on_phase: impl FnMut(Phase),
+    ) -> Result<FrameReport, Error> {
+        if points.len() > MAX_FRAME_POINTS {
+            return Err(Error::FrameTooLarge);
+        }
+        let mut f = self.begin_frame(pose)?;
+        let mut batch = Batch::new();
+        for chunk in points.chunks(BATCH) {
+            on_phase(Phase::Points);
+            batch.load_points(chunk);
+            batch.convert(&f);
+            batch.hash_points();
+            on_phase(Phase::Accumulate);
+            self.accumulate(&mut f, &batch, |j| chunk[j].labels);
+        }
+        Ok(self.finish(f, on_phase))
+    }
+
+    /// [`Map::integrate_depth`], reporting the start of every [`Phase`] to `on_phase`.
+    ///
+    /// ```
+    /// use sndt_core::*;
+    /// let cam = Pinhole { fx: 4.0, fy: 4.0, cx: 4.0, cy: 3.0, width: 8, height: 6 };
+    /// let depth = [2.0f32; 48];
+    /// let img = DepthImage { camera: cam, depth: &depth, kind: DepthKind::Planar,
+    ///                        labels: LabelImage::None, stride: 1 };
+    /// let mut map: Map<256, 64, 40> = Map::new(Config::DEFAULT);
+    /// let mut batches = 0;
+    /// let on_phase = |p| batches += (p == Phase::Points) as u32;
+    /// map.integrate_depth_observed(&Isometry3::identity(), &img, on_phase).unwrap();
+    /// assert_eq!(batches, 6); // one batch per image row here
+    /// ```
+    pub fn integrate_depth_observed(
+        &mut self,
+        pose: &Isometry3<f32>,
+        image: &DepthImage<'_>,
+        mut on_phase: impl FnMut(Phase),
+    ) -> Result<FrameReport, Error> {
         image.validate()?;
         if image.samples() > MAX_FRAME_POINTS {
             return Err(Error::FrameTooLarge);
         }
         let mut f = self.begin_frame(pose)?;
-        f.report.rejected_depth += image.for_each_point(|p, l| self.add_point(&mut f, p, &l));
-        Ok(self.finish(f))
+        let rays = PixelRays::new(&image.camera);
+        let mut batch = Batch::new();
+        let stride = image.stride as usize;
+        let (w, h) = (image.camera.width as usize, image.camera.height as usize);
+        let per_row = w.div_ceil(stride);
+        for row in (0..h).step_by(stride) {
+            let mut done = 0;
+            while done < per_row {
+                let n = (per_row - done).min(BATCH);
+                let col0 = done * stride;
+                on_phase(Phase::Points);
+                batch.load_pixels(image, &rays, (row, col0, n));
+                batch.convert(&f);
+                if !matches!(image.labels, LabelImage::None) {
+                    batch.hash_points();
+                }
+                on_phase(Phase::Accumulate);
+                self.accumulate_pixels(&mut f, &batch, image, row * w + col0);
+                done += n;
+            }
+        }
+        Ok(self.finish(f, on_phase))
+    }
+
+    /// The accumulation stage for a batch of pixels starting at pixel `first`, with the
+    /// image's labels.
+    fn accumulate_pixels(
+        &mut self,
+        f: &mut FrameState,
+        batch: &Batch,
+        image: &DepthImage<'_>,
+        first: usize,
+    ) {
+        let stride = image.stride as usize;
+        let pixel = |j: usize| first + j * stride;
+        match image.labels {
+            LabelImage::None => self.accumulate(f, batch, |_| Labels::NONE),
+            LabelImage::Top1(l) => self.accumulate(f, batch, |j| {
+                l.get(pixel(j)).map_or(Labels::NONE, |&c| Labels::top1(c))
+            }),
+            LabelImage::TopK(l) => {
+                self.accumulate(f, batch, |j| {
+                    l.get(pixel(j)).copied().unwrap_or(Labels::NONE)
+                });
+            }
+        }
     }
 
     /// Phases 2 and 3 after the frame's last point, then the frame's totals.
-    fn finish(&mut self, mut f: FrameState) -> FrameReport {
-        self.flush_run(&mut f);
+    fn finish(&mut self, mut f: FrameState, mut on_phase: impl FnMut(Phase)) -> FrameReport {
+        on_phase(Phase::EndVoxels);
+        self.flush_accumulators(&mut f);
         let head = self.sort_frame_list(f.head);
         self.update_end_voxels(&mut f, head);
+        on_phase(Phase::FreeSpace);
         self.clear_free_space(&mut f, head);
-        self.close_frame(f)
+        let report = self.close_frame(f);
+        on_phase(Phase::Done);
+        report
     }
 
     /// Phase 2 along the sorted frame list from `head`: every voxel that received points

@@ -56,6 +56,7 @@ impl VoxelKey {
         ]
     }
 
+    #[inline]
     pub(crate) fn from_ints(x: i32, y: i32, z: i32) -> Option<VoxelKey> {
         if x.abs() > KEY_LIMIT || y.abs() > KEY_LIMIT || z.abs() > KEY_LIMIT {
             return None;
@@ -68,10 +69,12 @@ impl VoxelKey {
     }
 
     /// Table key: biased components, never 0 for a valid key (0 marks an empty slot).
+    #[inline]
     pub(crate) fn packed(&self) -> u64 {
         pack(self.x as i32, self.y as i32, self.z as i32)
     }
 
+    #[inline]
     pub(crate) fn unpack(p: u64) -> VoxelKey {
         let (x, y, z) = unpack(p);
         VoxelKey {
@@ -82,6 +85,7 @@ impl VoxelKey {
     }
 
     /// Key of the 4x4x4 block holding this voxel, packed.
+    #[inline]
     pub(crate) fn block(&self) -> u64 {
         pack(
             (self.x as i32) >> 2,
@@ -91,11 +95,13 @@ impl VoxelKey {
     }
 
     /// Index of this voxel inside its block (0..64).
+    #[inline]
     pub(crate) fn cell(&self) -> u32 {
         ((self.x as u32) & 3) | (((self.y as u32) & 3) << 2) | (((self.z as u32) & 3) << 4)
     }
 
     /// The voxel key of cell `cell` in packed block `block`.
+    #[inline]
     pub(crate) fn from_block_cell(block: u64, cell: u32) -> VoxelKey {
         let (bx, by, bz) = unpack(block);
         VoxelKey {
@@ -106,6 +112,7 @@ impl VoxelKey {
     }
 
     /// Chebyshev distance in voxels.
+    #[inline]
     pub(crate) fn chebyshev(&self, o: &VoxelKey) -> u32 {
         let d = |a: i16, b: i16| (a as i32 - b as i32).unsigned_abs();
         d(self.x, o.x).max(d(self.y, o.y)).max(d(self.z, o.z))
@@ -142,6 +149,7 @@ pub(crate) fn join_key(k: [u16; 3]) -> u64 {
     ((k[0] as u64) << 32) | ((k[1] as u64) << 16) | k[2] as u64
 }
 
+#[inline]
 fn pack(x: i32, y: i32, z: i32) -> u64 {
     let b = |v: i32| ((v + 32768) as u64) & 0xffff;
     (b(x) << 32) | (b(y) << 16) | b(z)

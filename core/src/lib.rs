@@ -103,6 +103,7 @@ mod snapshot;
 mod frame;
 
 mod accumulate;
+mod batch;
 mod free_space;
 
 mod integrate;
@@ -116,7 +117,7 @@ pub use camera::{
 };
 pub use config::{Config, MissModel, LOGODDS_ONE};
 pub use error::Error;
-pub use frame::{FrameReport, MAX_FRAME_POINTS};
+pub use frame::{FrameReport, Phase, MAX_FRAME_POINTS};
 pub use free_space::voxels_on_segment;
 pub use gaussian::Gaussian;
 pub use key::{VoxelKey, KEY_LIMIT};

@@ -25,6 +25,7 @@ pub(crate) const EXPONENT_SHIFT: u32 = 12;
 /// assert_eq!(h, sndt_core::vote_hash(&[0.1, -0.2, 1.5]));
 /// assert_ne!(h, sndt_core::vote_hash(&[0.1, -0.2, 1.5001]));
 /// ```
+#[inline]
 pub fn vote_hash(p: &[f32; 3]) -> u32 {
     let mut h = p[0].to_bits().wrapping_mul(0x9e37_79b1);
     h = (h ^ p[1].to_bits()).wrapping_mul(0x85eb_ca77);
@@ -44,6 +45,7 @@ pub fn vote_hash(p: &[f32; 3]) -> u32 {
 /// assert!(sndt_core::takes_vote(u32::MAX, 0));
 /// assert!(sndt_core::takes_vote(0x3fff_ffff, 2) && !sndt_core::takes_vote(0x4000_0000, 2));
 /// ```
+#[inline]
 pub fn takes_vote(hash: u32, exponent: u8) -> bool {
     (hash as u64) >> (32 - exponent.min(MAX_VOTE_EXPONENT) as u32) == 0
 }
@@ -63,6 +65,7 @@ pub const MAX_VOTE_EXPONENT: u8 = 15;
 /// assert_eq!(next_vote_exponent(2, 100, 64), 3); // about 400 voting points
 /// assert_eq!(next_vote_exponent(5, 0, 64), 0); // no votes taken: count them all
 /// ```
+#[inline]
 pub fn next_vote_exponent(exponent: u8, taken: u16, votes_per_frame: u8) -> u8 {
     let estimate = (taken as u64) << exponent.min(MAX_VOTE_EXPONENT);
     let budget = votes_per_frame.max(1) as u64;
@@ -110,11 +113,18 @@ impl<const C: usize> Voxel<C> {
     pub(crate) fn vote(&mut self, p: &[f32; 3], classes: &[u8]) {
         let exponent = self.vote_exponent();
         if exponent == 0 || takes_vote(vote_hash(p), exponent) {
-            let taken = (self.tally & VOTES_TAKEN_MAX) + 1;
-            self.tally = (self.tally & !VOTES_TAKEN_MAX) | taken.min(VOTES_TAKEN_MAX);
-            for &c in classes {
-                let c = c as usize;
-                self.hist[c - 1] = self.hist[c - 1].saturating_add(1);
+            self.take_vote(classes);
+        }
+    }
+
+    /// One vote for each of `classes` (1..=C), saturating, counted as taken.
+    #[inline]
+    pub(crate) fn take_vote(&mut self, classes: &[u8]) {
+        let taken = (self.tally & VOTES_TAKEN_MAX) + 1;
+        self.tally = (self.tally & !VOTES_TAKEN_MAX) | taken.min(VOTES_TAKEN_MAX);
+        for &c in classes {
+            if let Some(bin) = self.hist.get_mut((c as usize).wrapping_sub(1)) {
+                *bin = bin.saturating_add(1);
             }
         }
     }

@@ -1,63 +1,143 @@
-//! Update time of one 1024x768 frame of the box room at 5, 10, 15 and 20 cm.
+//! Update time of the S-NDT map, in total and per phase, on 12 consecutive 1024x768 frames
+//! of the synthetic living room (the frames `sndt synth --scenes 1 --frames 12
+//! --no-predictions` writes, here with exact depth and ground-truth labels).
 //!
-//! `cargo bench -p sndt-host --bench update` prints ms/frame and points/s (single thread, release).
-//! Each cell size maps the same 12 frames of a walk around the room into a fresh map; the
-//! first frame (all voxels new) and the steady state are reported separately.
+//! `cargo bench -p sndt-host --bench update` prints, per cell size, single thread:
+//! - ms/frame: median, min and max over the 12 frames of a warm pass (the map's memory
+//!   touched by an earlier pass, then reset);
+//! - ns/point per phase ([`sndt_core::Phase`]) from a third pass that reports its phases:
+//!   `points` (pixel -> point -> key and offset), `accumulate` (lookup, sums, votes),
+//!   `end voxels` (one update per touched voxel) and `free space` (rays, misses), divided by
+//!   the frame's pixels; reporting the phases costs two clock reads per batch of 128 points.
 
-use sndt_core::{Config, Map};
-use sndt_host::dataset::synthetic::room::{orbit, Scene, HYPERSIM_CAMERA};
-use std::time::Instant;
+use sndt_core::{Config, DepthImage, DepthKind, LabelImage, Phase};
+use sndt_host::dataset::frame::{Frame, Rays};
+use sndt_host::dataset::source::Dataset;
+use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
+use sndt_host::semantic_map::{boxed_map, HostMap};
+use std::time::{Duration, Instant};
 
-type BenchMap = Map<{ 1 << 19 }, { 1 << 17 }, 40>;
+const CELLS: [f32; 4] = [0.05, 0.10, 0.15, 0.20];
 
 fn main() {
-    let scene = Scene::simple_room();
-    let cam = HYPERSIM_CAMERA;
-    let poses = orbit(12);
-    let frames: Vec<_> = poses.iter().map(|p| scene.render(p, &cam)).collect();
-    let valid: usize = frames[0].0.iter().filter(|&&d| d > 0.0).count();
+    let frames = living_room();
+    let pixels = frames[0].pixels();
     println!(
-        "sndt-core update benchmark: box room, {}x{} frames ({} valid points in frame 0), 12 poses",
-        cam.width, cam.height, valid
+        "sndt-core update benchmark: synthetic living room, {} frames of {} pixels, one thread",
+        frames.len(),
+        pixels
     );
     println!(
-        "{:>6} {:>12} {:>14} {:>14} {:>10} {:>10} {:>8} {:>9}",
-        "cell", "first ms", "steady ms", "points/s", "voxels", "blocks", "rays", "MiB map"
+        "{:>5} | {:>7} {:>7} {:>7} | {:>6} {:>10} {:>9} {:>9} {:>7} | {:>6} {:>7} {:>6}",
+        "cell",
+        "med ms",
+        "min ms",
+        "max ms",
+        "points",
+        "accumulate",
+        "end vox",
+        "free sp",
+        "total",
+        "rays",
+        "voxels",
+        "blocks"
     );
-    for cell in [0.05f32, 0.10, 0.15, 0.20] {
-        let mut map = sndt_host::semantic_map::boxed_map::<{ 1 << 19 }, { 1 << 17 }, 40>(
-            Config::with_cell_size(cell),
-        )
-        .expect("valid config");
-        let mut times = Vec::new();
-        let mut points = 0u64;
-        let mut rays = 0u32;
-        for (pose, (depth, labels)) in poses.iter().zip(&frames) {
-            let img = sndt_host::dataset::synthetic::room::depth_image(&cam, depth, labels);
-            let t = Instant::now();
-            let r = map.integrate_depth(pose, &img).expect("frame integrates");
-            times.push(t.elapsed().as_secs_f64());
-            points += r.points_used as u64;
-            rays += r.rays;
-            assert_eq!(
-                r.dropped_points + r.voxels_evicted,
-                0,
-                "bench map too small"
-            );
-        }
-        let first = times[0] * 1e3;
-        let steady: f64 = times[1..].iter().sum::<f64>() / (times.len() - 1) as f64;
-        let total: f64 = times.iter().sum();
-        println!(
-            "{:>4.0}cm {:>12.2} {:>14.2} {:>14.3e} {:>10} {:>10} {:>8} {:>9.1}",
-            cell * 100.0,
-            first,
-            steady * 1e3,
-            points as f64 / total,
-            map.len(),
-            map.block_count(),
-            rays / times.len() as u32,
-            core::mem::size_of::<BenchMap>() as f64 / (1 << 20) as f64
-        );
+    for cell in CELLS {
+        bench_cell(&frames, cell);
     }
+    println!("(ms: whole integrate_depth per frame; the other columns: ns per pixel, by phase)");
+}
+
+/// The 12 frames, rendered once.
+fn living_room() -> Vec<Frame> {
+    let split = Synthetic::new(SynthOptions {
+        scenes: 1,
+        frames: 12,
+        predictions: false,
+        ..SynthOptions::default()
+    })
+    .expect("synthetic split");
+    split
+        .frames()
+        .iter()
+        .map(|id| split.load(id).expect("frame renders"))
+        .collect()
+}
+
+/// The frame as the core's depth image with ground-truth labels.
+fn image(frame: &Frame) -> DepthImage<'_> {
+    let Rays::Pinhole(camera) = frame.rays.as_ref() else {
+        panic!("the synthetic camera is a pinhole");
+    };
+    DepthImage {
+        camera: *camera,
+        depth: &frame.depth,
+        kind: DepthKind::Planar,
+        labels: LabelImage::Top1(frame.labels.as_deref().expect("ground truth")),
+        stride: 1,
+    }
+}
+
+/// One row of the table: a warm-up pass, a timed pass and a pass timed by phase.
+fn bench_cell(frames: &[Frame], cell: f32) {
+    let config = Config::with_cell_size(cell);
+    let mut map: Box<HostMap> = boxed_map(config).expect("valid config");
+    integrate_all(&mut map, frames);
+    map.reset(config).expect("valid config");
+    let mut ms = integrate_all(&mut map, frames);
+    ms.sort_by(f64::total_cmp);
+    map.reset(config).expect("valid config");
+    let mut phases = [Duration::ZERO; 5];
+    let mut rays = 0u64;
+    for f in frames {
+        let mut last = Instant::now();
+        let mut current: Option<Phase> = None;
+        let r = map
+            .integrate_depth_observed(&f.pose, &image(f), |p| {
+                let now = Instant::now();
+                if let Some(c) = current {
+                    phases[c as usize] += now - last;
+                }
+                (last, current) = (now, Some(p));
+            })
+            .expect("frame integrates");
+        assert_eq!(
+            r.dropped_points + r.voxels_evicted,
+            0,
+            "bench map too small"
+        );
+        rays += r.rays as u64;
+    }
+    let points = (frames.len() * frames[0].pixels()) as f64;
+    let ns = |d: Duration| d.as_secs_f64() * 1e9 / points;
+    let total: Duration = phases.iter().sum();
+    println!(
+        "{:>3.0}cm | {:>7.2} {:>7.2} {:>7.2} | {:>6.2} {:>10.2} {:>9.2} {:>9.2} {:>7.2} | {:>6} {:>7} {:>6}",
+        cell * 100.0,
+        ms[ms.len() / 2],
+        ms[0],
+        ms[ms.len() - 1],
+        ns(phases[Phase::Points as usize]),
+        ns(phases[Phase::Accumulate as usize]),
+        ns(phases[Phase::EndVoxels as usize]),
+        ns(phases[Phase::FreeSpace as usize]),
+        ns(total),
+        rays / frames.len() as u64,
+        map.len(),
+        map.block_count()
+    );
+}
+
+/// Integrates every frame; the time of each in ms.
+fn integrate_all(map: &mut HostMap, frames: &[Frame]) -> Vec<f64> {
+    frames
+        .iter()
+        .map(|f| {
+            let img = image(f);
+            let t = Instant::now();
+            map.integrate_depth(&f.pose, &img)
+                .expect("frame integrates");
+            t.elapsed().as_secs_f64() * 1e3
+        })
+        .collect()
 }
