@@ -14,6 +14,7 @@ pub mod export;
 pub mod labels;
 pub mod map;
 pub mod open_args;
+pub mod points;
 pub mod synth;
 pub mod testvector;
 
@@ -39,6 +40,9 @@ enum Command {
     Testvector(testvector::TestvectorArgs),
     /// Write one frame's world points, coloured by label, as a PLY point cloud.
     Cloud(cloud::CloudArgs),
+    /// Write frames' sensor origins and world points as a raw binary file (SNDTPTS1), the
+    /// input of the OctoMap peer benchmark.
+    Points(points::PointsArgs),
     /// Generate a synthetic labelled split in the prepared layout (no download).
     Synth(synth::SynthArgs),
     /// Map every trajectory of a dataset and evaluate the back-projections with the paper's
@@ -60,6 +64,7 @@ pub fn main() -> Result<()> {
         Command::Budget(a) => budget::run(&a),
         Command::Testvector(a) => testvector::run(&a),
         Command::Cloud(a) => cloud::run(&a),
+        Command::Points(a) => points::run(&a),
         Command::Synth(a) => synth::run(&a),
         Command::Map(a) => map::run(&a),
         Command::Export(a) => export::run(&a),

@@ -1,8 +1,9 @@
 //! Everything sndt writes for people and other tools: PNG pictures, SVG charts, PLY
-//! point clouds and ellipsoid meshes.
+//! point clouds and ellipsoid meshes, raw world points for other mappers.
 
 pub mod chart;
 pub mod export;
 pub mod picture;
 pub mod ply;
+pub mod points;
 pub mod progress;

@@ -1,0 +1,118 @@
+//! The sndt side of the OctoMap peer benchmark (`bash scripts/bench-peers.sh`): update
+//! time of the S-NDT map on the first frames of a dataset directory, per cell size, for
+//! the script to put beside OctoMap's on the same points.
+//!
+//! `cargo bench -p sndt-host --bench peers -- DATASET [FRAMES]` opens `DATASET` (a
+//! prepared layout, e.g. what `sndt synth --scenes 1 --frames 12 --no-predictions`
+//! writes, or `synthetic[:S:F]`), loads its first `FRAMES` frames (default 12) into
+//! memory and, per cell size (5, 10, 20 cm), single thread:
+//! - a warm-up pass into a fresh heap map ([`HostMap`]), then `reset`, so the timed pass
+//!   finds the map's memory touched;
+//! - a timed pass: one `integrate_depth` per frame (every pixel, ground-truth labels,
+//!   `Config::with_cell_size(cell)`: statistics, classes and free space up to
+//!   `max_range`), nothing else inside the clock.
+//!
+//! It prints one line per cell size,
+//! `sndt cell=0.10 median_ms=... min_ms=... max_ms=... voxels=... blocks=...`, the median
+//! of an even count being the mean of the two middle frames (as the OctoMap harness
+//! computes it). Without a dataset argument (a plain `cargo bench`) it prints a note and
+//! exits successfully.
+
+use sndt_core::{Config, DepthImage, LabelImage};
+use sndt_host::dataset::frame::{Frame, Rays};
+use sndt_host::dataset::open::open_spec;
+use sndt_host::semantic_map::{boxed_map, HostMap};
+use std::time::Instant;
+
+const CELLS: [f32; 3] = [0.05, 0.10, 0.20];
+
+fn main() {
+    // `cargo bench` passes `--bench` (and other flags) before the user's arguments.
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .collect();
+    let Some(spec) = args.first() else {
+        println!("peers: no dataset given, skipped (run `bash scripts/bench-peers.sh`)");
+        return;
+    };
+    let count: usize = args
+        .get(1)
+        .map_or(12, |n| n.parse().expect("FRAMES is a number"));
+    let frames = load(spec, count);
+    println!(
+        "sndt frames={} pixels={} max_range={} threads=1",
+        frames.len(),
+        frames[0].pixels(),
+        Config::DEFAULT.max_range
+    );
+    for cell in CELLS {
+        bench_cell(&frames, cell);
+    }
+}
+
+/// The first `count` frames of the dataset at `spec`, in memory.
+fn load(spec: &str, count: usize) -> Vec<Frame> {
+    let data = open_spec(spec, &Default::default()).expect("dataset opens");
+    let ids = data.frames();
+    assert!(ids.len() >= count, "{spec}: fewer than {count} frames");
+    ids[..count]
+        .iter()
+        .map(|id| data.load(id).expect("frame loads"))
+        .collect()
+}
+
+/// The frame as the core's depth image: every pixel, ground-truth labels.
+fn image(frame: &Frame) -> DepthImage<'_> {
+    let Rays::Pinhole(camera) = frame.rays.as_ref() else {
+        panic!("{}: the peer benchmark needs a pinhole camera", frame.id);
+    };
+    DepthImage {
+        camera: *camera,
+        depth: &frame.depth,
+        kind: frame.depth_kind,
+        labels: LabelImage::Top1(frame.labels.as_deref().expect("ground-truth labels")),
+        stride: 1,
+    }
+}
+
+/// One line: a warm-up pass, `reset`, then the timed pass.
+fn bench_cell(frames: &[Frame], cell: f32) {
+    let config = Config::with_cell_size(cell);
+    let mut map: Box<HostMap> = boxed_map(config).expect("valid config");
+    integrate_all(&mut map, frames);
+    map.reset(config).expect("valid config");
+    let mut ms = integrate_all(&mut map, frames);
+    ms.sort_by(f64::total_cmp);
+    let n = ms.len();
+    let median = (ms[(n - 1) / 2] + ms[n / 2]) / 2.0;
+    println!(
+        "sndt cell={cell:.2} median_ms={median:.3} min_ms={:.3} max_ms={:.3} voxels={} blocks={}",
+        ms[0],
+        ms[n - 1],
+        map.len(),
+        map.block_count()
+    );
+}
+
+/// Integrates every frame; the time of each in ms. Panics if the map dropped or evicted
+/// anything (the benchmark would then time a smaller map).
+fn integrate_all(map: &mut HostMap, frames: &[Frame]) -> Vec<f64> {
+    frames
+        .iter()
+        .map(|f| {
+            let img = image(f);
+            let t = Instant::now();
+            let report = map
+                .integrate_depth(&f.pose, &img)
+                .expect("frame integrates");
+            let ms = t.elapsed().as_secs_f64() * 1e3;
+            assert_eq!(
+                report.dropped_points + report.voxels_evicted,
+                0,
+                "bench map too small"
+            );
+            ms
+        })
+        .collect()
+}

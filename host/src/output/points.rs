@@ -1,0 +1,145 @@
+//! Frames as raw world points for other mappers: the sensor origin and the world-frame
+//! points of every frame, the points the core integrates, in a small binary file
+//! (`SNDTPTS1`) that `scripts/peers/octomap_bench.cpp` reads to build OctoMap from the
+//! same input as sndt.
+//!
+//! Format, all little-endian:
+//!
+//! | bytes | content |
+//! |---|---|
+//! | 8 | magic `SNDTPTS1` |
+//! | 4 | `u32` number of frames |
+//!
+//! then per frame:
+//!
+//! | bytes | content |
+//! |---|---|
+//! | 12 | `3 x f32` sensor origin (the pose's translation), world, metres |
+//! | 4 | `u32` number of points `n` |
+//! | 12 n | `n x 3 x f32` world points `x, y, z`, metres |
+//!
+//! The points of a frame are those of every measured pixel, row-major
+//! ([`Frame::for_each_camera_point`], the core's `depth_point`), moved to the world by
+//! `frame.pose * point` in `f32`: the points the core integrates, the same pixels and
+//! depths (the core's depth-image path computes pixel rays with reciprocals, which can
+//! differ from `Pinhole::ray` in the last bit). Points beyond the map's `max_range` are
+//! kept: the consumer applies its own maximum range, as the core does.
+
+use crate::dataset::frame::{Frame, FrameId};
+use crate::dataset::source::Dataset;
+use anyhow::{bail, Context, Result};
+use sndt_core::Point3;
+use std::fmt;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// The first 8 bytes of a points file.
+pub const MAGIC: &[u8; 8] = b"SNDTPTS1";
+
+/// One frame's sensor origin and measured world points.
+///
+/// ```
+/// use sndt_host::dataset::{Frame, FrameId, Rays};
+/// use sndt_core::{Isometry3, Translation3, UnitQuaternion};
+/// let cam = sndt_core::Pinhole { fx: 1.0, fy: 1.0, cx: 1.0, cy: 1.0, width: 2, height: 2 };
+/// let frame = Frame {
+///     id: FrameId::parse("s/c/0").unwrap(),
+///     pose: Isometry3::from_parts(Translation3::new(1.0, 2.0, 3.0), UnitQuaternion::identity()),
+///     rays: std::sync::Arc::new(Rays::Pinhole(cam)),
+///     depth: vec![2.0, 0.0, f32::NAN, 2.0],
+///     depth_kind: sndt_core::DepthKind::Planar,
+///     labels: None,
+///     predictions: None,
+/// };
+/// let (origin, points) = sndt_host::output::points::frame_points(&frame);
+/// assert_eq!(origin, [1.0, 2.0, 3.0]);
+/// assert_eq!(points, [[0.0, 1.0, 5.0], [2.0, 3.0, 5.0]]);
+/// ```
+pub fn frame_points(frame: &Frame) -> ([f32; 3], Vec<[f32; 3]>) {
+    let t = frame.pose.translation.vector;
+    let mut points = Vec::with_capacity(frame.pixels());
+    frame.for_each_camera_point(1, |_, p| {
+        let w = frame.pose * Point3::from(p);
+        points.push([w.x, w.y, w.z]);
+    });
+    ([t.x, t.y, t.z], points)
+}
+
+/// What [`write_points`] wrote.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PointsSummary {
+    /// The file.
+    pub path: PathBuf,
+    /// Number of frames.
+    pub frames: usize,
+    /// Number of points over all frames.
+    pub points: usize,
+}
+
+impl fmt::Display for PointsSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "wrote {}: {} frames, {} points",
+            self.path.display(),
+            self.frames,
+            self.points
+        )
+    }
+}
+
+/// Writes frames `ids` of `data`, in that order, to `out` in the format above (one frame
+/// in memory at a time), creating `out`'s directory.
+///
+/// ```
+/// use sndt_host::dataset::{open_spec, Dataset};
+/// let data = open_spec("synthetic:1:2", &Default::default()).unwrap();
+/// # let out = std::env::temp_dir().join(format!("sndt-points-doc-{}.bin", std::process::id()));
+/// let s = sndt_host::output::points::write_points(data.as_ref(), &data.frames()[..1], &out).unwrap();
+/// assert_eq!(s.frames, 1);
+/// let bytes = std::fs::read(&out).unwrap();
+/// assert_eq!(&bytes[..8], b"SNDTPTS1");
+/// assert_eq!(bytes.len(), 12 + 16 + 12 * s.points);
+/// # std::fs::remove_file(&out).unwrap();
+/// ```
+pub fn write_points(data: &dyn Dataset, ids: &[FrameId], out: &Path) -> Result<PointsSummary> {
+    let shown = out.display();
+    let count = u32::try_from(ids.len()).context("too many frames")?;
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    let file = File::create(out).with_context(|| format!("{shown}: creating"))?;
+    let mut w = BufWriter::new(file);
+    let mut header = MAGIC.to_vec();
+    header.extend_from_slice(&count.to_le_bytes());
+    w.write_all(&header)
+        .with_context(|| format!("{shown}: writing"))?;
+    let mut points = 0;
+    for id in ids {
+        let frame = data
+            .load(id)
+            .with_context(|| format!("loading frame {id}"))?;
+        let (origin, pts) = frame_points(&frame);
+        let Ok(n) = u32::try_from(pts.len()) else {
+            bail!("{id}: {} points do not fit a u32 count", pts.len());
+        };
+        let mut body = Vec::with_capacity(16 + 12 * pts.len());
+        for v in origin {
+            body.extend_from_slice(&v.to_le_bytes());
+        }
+        body.extend_from_slice(&n.to_le_bytes());
+        for v in pts.iter().flatten() {
+            body.extend_from_slice(&v.to_le_bytes());
+        }
+        w.write_all(&body)
+            .with_context(|| format!("{shown}: writing"))?;
+        points += pts.len();
+    }
+    w.flush().with_context(|| format!("{shown}: writing"))?;
+    Ok(PointsSummary {
+        path: out.to_path_buf(),
+        frames: ids.len(),
+        points,
+    })
+}

@@ -1,0 +1,113 @@
+#!/usr/bin/env bash
+# Opt-in peer benchmark: the S-NDT map update beside OctoMap's OcTree update on the same
+# points, for cell sizes of 5, 10 and 20 cm. Prints one Markdown table of ms/frame
+# (median of 12 frames, min-max in parentheses) and the ratio sndt / OctoMap.
+#
+# Both sides: the same 12 consecutive 1024x768 frames of the synthetic living room
+# (`sndt synth --scenes 1 --frames 12 --no-predictions`), the same world points (`sndt
+# points` exports exactly what the core integrates), max range 20 m, the same cell size,
+# one thread pinned to the same CPU, a warm-up pass then a timed pass, only the map
+# update inside the clock (no I/O, no evaluation). sndt: `integrate_depth` with
+# ground-truth labels (statistics, classes and free space), host/benches/peers.rs.
+# OctoMap: `OcTree::insertPointCloud(cloud, origin, 20, lazy_eval false, discretize
+# true)`, scripts/peers/octomap_bench.cpp against Debian's liboctomap-dev.
+#
+# Installs liboctomap-dev (and g++, pkg-config) with apt-get when missing; reuses the
+# frames under $CARGO_TARGET_DIR/peers (default target/peers) when present.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+FRAMES=12
+CELLS=(0.05 0.10 0.20)
+WORK="${CARGO_TARGET_DIR:-target}/peers"
+DATA="$WORK/living-room"
+POINTS="$WORK/points.bin"
+HARNESS_SRC=scripts/peers/octomap_bench.cpp
+HARNESS="$WORK/octomap_bench"
+# Before anything runs: the CPUs (nproc would count OMP_NUM_THREADS) and the load.
+CPUS=$(env -u OMP_NUM_THREADS -u OMP_THREAD_LIMIT nproc)
+LOAD=$(cut -d' ' -f1 /proc/loadavg)
+
+step() { printf '\n==> %s\n' "$*"; }
+
+installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q 'install ok installed'; }
+
+step "OctoMap, g++ and pkg-config"
+missing=()
+installed liboctomap-dev || missing+=(liboctomap-dev)
+command -v g++ >/dev/null 2>&1 || missing+=(g++)
+command -v pkg-config >/dev/null 2>&1 || missing+=(pkg-config)
+if ((${#missing[@]})); then
+    sudo=()
+    if [ "$(id -u)" -ne 0 ]; then sudo=(sudo); fi
+    export DEBIAN_FRONTEND=noninteractive
+    "${sudo[@]}" apt-get update -qq
+    "${sudo[@]}" apt-get install -y -qq "${missing[@]}" >/dev/null
+fi
+echo "octomap $(pkg-config --modversion octomap), $(g++ --version | head -n 1)"
+
+step "frames: synthetic living room, $FRAMES frames ($DATA)"
+mkdir -p "$WORK"
+if [ -f "$DATA/test.txt" ] && [ "$(wc -l <"$DATA/test.txt")" -eq "$FRAMES" ]; then
+    echo "present, reused"
+else
+    rm -rf "$DATA"
+    cargo run --release --quiet -p sndt-host --bin sndt -- \
+        synth --out "$DATA" --scenes 1 --frames "$FRAMES" --no-predictions
+fi
+
+step "world points for OctoMap ($POINTS)"
+cargo run --release --quiet -p sndt-host --bin sndt -- \
+    points "$DATA" --out "$POINTS" --frames "$FRAMES"
+
+step "OctoMap harness ($HARNESS)"
+if [ ! -x "$HARNESS" ] || [ "$HARNESS_SRC" -nt "$HARNESS" ]; then
+    # shellcheck disable=SC2046 # pkg-config prints several flags
+    g++ -O2 -std=c++17 -o "$HARNESS" "$HARNESS_SRC" $(pkg-config --cflags --libs octomap)
+fi
+echo "built"
+
+# One thread on the same CPU for both sides; OMP_NUM_THREADS=1 in case the library was
+# built with OpenMP (Debian's is not).
+pin=()
+if command -v taskset >/dev/null 2>&1; then pin=(taskset -c "$((CPUS - 1))"); fi
+
+step "sndt (cargo bench -p sndt-host --bench peers)"
+cargo bench --quiet -p sndt-host --bench peers --no-run
+sndt_out="$("${pin[@]}" cargo bench --quiet -p sndt-host --bench peers -- "$DATA" "$FRAMES")"
+echo "$sndt_out"
+
+step "OctoMap ($HARNESS)"
+octo_out="$(OMP_NUM_THREADS=1 "${pin[@]}" "$HARNESS" "$POINTS" "${CELLS[@]}")"
+echo "$octo_out"
+
+# The value of `key=` on the line of `side` for cell size `cell`.
+field() { awk -v s="$1" -v c="cell=$2" -v k="$3=" '$1 == s && $2 == c { for (i = 3; i <= NF; i++) if (index($i, k) == 1) print substr($i, length(k) + 1) }'; }
+
+step "result"
+echo
+echo "| cell | sndt ms/frame | OctoMap ms/frame | sndt / OctoMap |"
+echo "|---|---|---|---|"
+for cell in "${CELLS[@]}"; do
+    s_med=$(field sndt "$cell" median_ms <<<"$sndt_out")
+    s_min=$(field sndt "$cell" min_ms <<<"$sndt_out")
+    s_max=$(field sndt "$cell" max_ms <<<"$sndt_out")
+    o_med=$(field octomap "$cell" median_ms <<<"$octo_out")
+    o_min=$(field octomap "$cell" min_ms <<<"$octo_out")
+    o_max=$(field octomap "$cell" max_ms <<<"$octo_out")
+    if [ -z "$s_med" ] || [ -z "$o_med" ]; then
+        echo "missing result for cell $cell" >&2
+        exit 1
+    fi
+    awk -v c="$cell" -v sm="$s_med" -v sl="$s_min" -v sh="$s_max" \
+        -v om="$o_med" -v ol="$o_min" -v oh="$o_max" 'BEGIN {
+        printf "| %g cm | %.1f (%.1f-%.1f) | %.1f (%.1f-%.1f) | %.3f |\n",
+            c * 100, sm, sl, sh, om, ol, oh, sm / om
+    }'
+done
+echo
+cpu=$(awk -F': *' '/^model name/ { print $2; exit }' /proc/cpuinfo)
+commit=$(git rev-parse --short HEAD)
+if ! git diff --quiet HEAD 2>/dev/null; then commit="$commit (working tree modified)"; fi
+echo "$FRAMES frames of $(awk '$1 == "sndt" && $2 ~ /^frames=/ { sub("pixels=", "", $3); print $3 }' <<<"$sndt_out") pixels, median of $FRAMES (min-max), one thread;" \
+    "machine: $CPUS CPUs (nproc), ${cpu:-unknown CPU}, load average $LOAD before the runs; commit $commit"
