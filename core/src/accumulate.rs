@@ -13,7 +13,7 @@ use crate::key::{axis_key, VoxelKey};
 use crate::labels::Labels;
 use crate::map::Map;
 use crate::votes::voting_classes;
-use crate::voxel::{PointSums, Voxel};
+use crate::voxel::{packed_offsets, PackedSums, Voxel};
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// Phase 1 for one point `p` in the sensor frame; every point ends in exactly one
@@ -54,12 +54,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// or set up by [`Map::first_point`]. `None` when the map is full.
     #[inline]
     pub(crate) fn point_voxel(&mut self, f: &mut FrameState, key: &VoxelKey) -> Option<usize> {
-        let packed_block = key.block();
-        let bs = if f.block_cache.0 == packed_block {
-            f.block_cache.1
-        } else {
-            self.frame_block(f, packed_block, true)?
-        };
+        let bs = self.frame_block(f, key.block(), true)?;
         let bit = 1u64 << key.cell();
         let packed = key.packed();
         let vs = if self.blocks.slots[bs].hit & bit == 0 {
@@ -101,7 +96,23 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         if f.acc[a].key != key {
             self.open_accumulator(f, a, vs, key);
         }
-        f.acc[a].sums.add(q);
+        self.add_to_accumulator(f, a, &packed_offsets(q));
+    }
+
+    /// Adds a point's [`packed_offsets`] to accumulator `a`, which must hold the point's
+    /// voxel; a full accumulator is added to its voxel first.
+    #[inline]
+    pub(crate) fn add_to_accumulator(&mut self, f: &mut FrameState, a: usize, w: &[u64; 3]) {
+        let Some(acc) = f.acc.get_mut(a) else {
+            return;
+        };
+        if acc.sums.n == PackedSums::MAX_POINTS {
+            if let Some(v) = self.voxels.slots.get_mut(acc.slot) {
+                v.merge(&acc.sums.unbias());
+            }
+            acc.sums = PackedSums::EMPTY;
+        }
+        acc.sums.add(w);
     }
 
     /// Makes accumulator `a` hold voxel slot `vs` (packed key `key`), adding the points
@@ -113,7 +124,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         };
         self.flush(acc);
         *acc = Accumulator {
-            sums: PointSums::EMPTY,
+            sums: PackedSums::EMPTY,
             slot: vs,
             key,
             vote_exponent: self.voxels.slots.get(vs).map_or(0, Voxel::vote_exponent),
@@ -132,7 +143,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     fn flush(&mut self, acc: &mut Accumulator) {
         if acc.sums.n > 0 {
             if let Some(v) = self.voxels.slots.get_mut(acc.slot) {
-                v.merge(&acc.sums);
+                v.merge(&acc.sums.unbias());
             }
         }
         *acc = Accumulator::NONE;

@@ -16,18 +16,23 @@ use crate::frame::{accumulator_index, FrameState};
 use crate::key::VoxelKey;
 use crate::labels::{LabeledPoint, Labels};
 use crate::map::Map;
+use crate::config::Config;
 use crate::votes::{takes_vote, vote_hash, voting_classes};
+use crate::voxel::packed_offsets;
 
 /// Points per batch: large enough that the per-batch work vanishes, small enough for a
 /// microcontroller's stack (a batch is about 4 KiB).
 pub(crate) const BATCH: usize = 128;
 
-/// The common case: finite, inside max range and the key range.
+/// The common case: finite, inside max range and the key range, labels that fit the map
+/// with at most one voting class.
 const FAST: u8 = 0;
+/// Otherwise fast, but a label above the class count (counted as `rejected_label`).
+const BAD_LABEL: u8 = 1;
 /// Anything else: handled point by point by `Map::add_point`.
-const SLOW: u8 = 1;
+const SLOW: u8 = 2;
 /// A pixel without a depth measurement (counted as `rejected_depth`).
-const NO_DEPTH: u8 = 2;
+const NO_DEPTH: u8 = 3;
 
 /// One batch of points in structure-of-arrays form.
 pub(crate) struct Batch {
@@ -38,8 +43,12 @@ pub(crate) struct Batch {
     /// points; see [`Batch::key`]).
     key_x: [u32; BATCH],
     key_yz: [u32; BATCH],
-    /// Quantised offsets in the voxel (x, y, z; valid for `FAST` points).
+    /// Quantised offsets in the voxel (x, y, z; valid for `FAST` points), and their packed
+    /// contribution to the voxel's sums (`packed_offsets`).
     q: [[i32; BATCH]; 3],
+    w: [[u64; BATCH]; 3],
+    /// The class a point votes for (0: none).
+    vote: [u8; BATCH],
     /// Vote-sampling hashes of the sensor points ([`crate::vote_hash`]), when computed.
     hash: [u32; BATCH],
     status: [u8; BATCH],
@@ -53,6 +62,8 @@ impl Batch {
             key_x: [0; BATCH],
             key_yz: [0; BATCH],
             q: [[0; BATCH]; 3],
+            w: [[0; BATCH]; 3],
+            vote: [0; BATCH],
             hash: [0; BATCH],
             status: [FAST; BATCH],
         }
@@ -142,19 +153,69 @@ impl Batch {
             let r2 = x * x + y * y + z * z;
             let mut fast = r2 > 0.0 && r2 <= max2;
             let mut k = [0u32; 3];
+            let mut q = [0i32; 3];
             for i in 0..3 {
                 let w = r[(i, 0)] * x + r[(i, 1)] * y + r[(i, 2)] * z + f.origin[i];
                 let t = w * f.inv_quantum;
                 fast &= t >= f.t_min && t < f.t_max;
                 let m = floor_small(t);
                 k[i] = ((m >> f.quant_bits) + 32768) as u32 & 0xffff;
-                self.q[i][j] = (m & f.quant_mask) - f.qhalf + ((t - m as f32) >= 0.5) as i32;
+                q[i] = (m & f.quant_mask) - f.qhalf + ((t - m as f32) >= 0.5) as i32;
+            }
+            for i in 0..3 {
+                self.q[i][j] = q[i];
             }
             self.key_x[j] = k[0];
             self.key_yz[j] = (k[1] << 16) | k[2];
             // NO_DEPTH stays, FAST becomes SLOW unless every check passed.
             self.status[j] = self.status[j].max(if fast { FAST } else { SLOW });
         }
+        for j in 0..n {
+            let w = packed_offsets([self.q[0][j], self.q[1][j], self.q[2][j]]);
+            for i in 0..3 {
+                self.w[i][j] = w[i];
+            }
+        }
+    }
+
+    /// Labels of pixels with one class each: `labels` from the batch's first pixel on, at
+    /// `stride`. A class id is the class it votes for (0, void, votes for nothing).
+    pub(crate) fn set_top1_labels(&mut self, labels: &[u8], stride: usize, classes: usize) {
+        let n = self.len.min(BATCH);
+        for (j, &c) in labels.iter().step_by(stride.max(1)).take(n).enumerate() {
+            self.vote[j] = c;
+            if c as usize > classes && self.status[j] == FAST {
+                self.status[j] = BAD_LABEL;
+            }
+        }
+    }
+
+    /// Labels from `labels(j)` for every point, checked against the map's class count and
+    /// turned into the class each votes for; a point with several voting classes takes the
+    /// scalar path.
+    pub(crate) fn set_labels(
+        &mut self,
+        labels: impl Fn(usize) -> Labels,
+        config: &Config,
+        classes: usize,
+    ) {
+        for j in 0..self.len.min(BATCH) {
+            let l = labels(j);
+            let voting = voting_classes(&l, config);
+            self.vote[j] = voting.first().copied().unwrap_or(0);
+            if self.status[j] == FAST {
+                if !l.fits(classes) {
+                    self.status[j] = BAD_LABEL;
+                } else if voting.len() > 1 {
+                    self.status[j] = SLOW;
+                }
+            }
+        }
+    }
+
+    /// No labels: no point votes.
+    pub(crate) fn clear_labels(&mut self) {
+        self.vote = [0; BATCH];
     }
 
     /// The vote-sampling hash of every loaded point (needed when the points have labels).
@@ -177,8 +238,9 @@ impl Batch {
 }
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
-    /// The accumulation stage for a converted batch; `labels(j)` gives the labels of the
-    /// batch's point `j`. Every point ends in exactly one counter of the frame's report.
+    /// The accumulation stage for a converted batch with its labels set; `labels(j)` gives
+    /// the labels of point `j` for the scalar path. Every point ends in exactly one counter
+    /// of the frame's report.
     #[inline]
     pub(crate) fn accumulate(
         &mut self,
@@ -194,15 +256,14 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                     f.report.rejected_depth += 1;
                     continue;
                 }
+                BAD_LABEL => {
+                    f.report.rejected_label += 1;
+                    continue;
+                }
                 _ => {
                     self.add_point(f, batch.point(j), &labels(j));
                     continue;
                 }
-            }
-            let l = labels(j);
-            if !l.fits(C) {
-                f.report.rejected_label += 1;
-                continue;
             }
             let key = batch.key(j);
             let a = accumulator_index(key);
@@ -213,12 +274,12 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 };
                 self.open_accumulator(f, a, vs, key);
             }
-            let acc = &mut f.acc[a];
-            acc.sums.add([batch.q[0][j], batch.q[1][j], batch.q[2][j]]);
-            let classes = voting_classes(&l, &self.config);
-            if !classes.is_empty() && takes_vote(batch.hash[j], acc.vote_exponent) {
-                if let Some(v) = self.voxels.slots.get_mut(acc.slot) {
-                    v.take_vote(&classes);
+            let w = [batch.w[0][j], batch.w[1][j], batch.w[2][j]];
+            self.add_to_accumulator(f, a, &w);
+            let class = batch.vote[j];
+            if class != 0 && takes_vote(batch.hash[j], f.acc[a].vote_exponent) {
+                if let Some(v) = self.voxels.slots.get_mut(f.acc[a].slot) {
+                    v.take_vote(&[class]);
                 }
             }
             used += 1;

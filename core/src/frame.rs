@@ -7,11 +7,12 @@
 
 use crate::block::Block;
 use crate::camera::validate_pose;
+use crate::config::to_fixed;
 use crate::error::Error;
 use crate::key::{axis_key, floor_i32, VoxelKey, KEY_LIMIT};
 use crate::map::Map;
 use crate::table::{Entry, NIL};
-use crate::voxel::PointSums;
+use crate::voxel::PackedSums;
 use nalgebra::{Isometry3, Matrix3};
 
 /// Most points one frame may hold. With `quant_bits <= 6` and `n_max <= 65535` this bounds a
@@ -97,7 +98,7 @@ pub(crate) const ACCUMULATORS: usize = 64;
 /// between voxels, and each of them keeps its accumulator.
 #[derive(Clone, Copy)]
 pub(crate) struct Accumulator {
-    pub(crate) sums: PointSums,
+    pub(crate) sums: PackedSums,
     /// The voxel's slot.
     pub(crate) slot: usize,
     /// The voxel's packed key (0, never a valid key, when unused).
@@ -109,7 +110,7 @@ pub(crate) struct Accumulator {
 impl Accumulator {
     /// An unused accumulator.
     pub(crate) const NONE: Accumulator = Accumulator {
-        sums: PointSums::EMPTY,
+        sums: PackedSums::EMPTY,
         slot: usize::MAX,
         key: 0,
         vote_exponent: 0,
@@ -120,6 +121,16 @@ impl Accumulator {
 #[inline]
 pub(crate) fn accumulator_index(key: u64) -> usize {
     ((key & 0x3) | ((key >> 14) & 0xc) | ((key >> 28) & 0x30)) as usize
+}
+
+/// Entries of the frame's block cache: rays and points revisit the blocks around the
+/// sensor many times per frame, and a hash lookup costs a cache miss or two.
+pub(crate) const BLOCK_CACHE: usize = 256;
+
+/// The block cache entry of a packed block key: the low 3, 3 and 2 bits of its x, y and z.
+#[inline]
+fn block_cache_index(packed: u64) -> usize {
+    (((packed >> 32) & 0x7) | ((packed >> 13) & 0x38) | ((packed & 0x3) << 6)) as usize
 }
 
 /// Per-frame state; lives on the stack during one integration.
@@ -141,8 +152,13 @@ pub(crate) struct FrameState {
     pub(crate) qscale: f32,
     pub(crate) qhalf: i32,
     pub(crate) max_range: f32,
+    /// The constant miss and the log-odds clamps in fixed point.
+    pub(crate) miss: i32,
+    pub(crate) clamp: (i32, i32),
     pub(crate) head: u32,
-    pub(crate) block_cache: (u64, usize),
+    /// Blocks this frame has touched, by [`block_cache_index`]: (packed key, slot). They
+    /// cannot be evicted during the frame, so entries never go stale.
+    pub(crate) block_cache: [(u64, u32); BLOCK_CACHE],
     pub(crate) voxel_cache: (u64, usize),
     /// Open voxel accumulators of phase 1.
     pub(crate) acc: [Accumulator; ACCUMULATORS],
@@ -219,8 +235,13 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             qscale,
             qhalf: 1 << (self.config.quant_bits - 1),
             max_range: self.config.max_range,
+            miss: to_fixed(self.config.miss),
+            clamp: (
+                to_fixed(self.config.clamp_min),
+                to_fixed(self.config.clamp_max),
+            ),
             head: NIL,
-            block_cache: (0, 0),
+            block_cache: [(0, 0); BLOCK_CACHE],
             voxel_cache: (0, 0),
             acc: [Accumulator::NONE; ACCUMULATORS],
             voxels_exhausted: false,
@@ -251,8 +272,11 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         packed: u64,
         link: bool,
     ) -> Option<usize> {
-        if f.block_cache.0 == packed {
-            return Some(f.block_cache.1);
+        let c = block_cache_index(packed);
+        if let Some(&(key, slot)) = f.block_cache.get(c) {
+            if key == packed {
+                return Some(slot as usize);
+            }
         }
         let bs = match self.blocks.find(packed) {
             Some(bs) => bs,
@@ -271,7 +295,9 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             b.frame_next = f.head;
             f.head = bs as u32 + 1;
         }
-        f.block_cache = (packed, bs);
+        if let Some(entry) = f.block_cache.get_mut(c) {
+            *entry = (packed, bs as u32);
+        }
         Some(bs)
     }
 

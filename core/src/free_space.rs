@@ -107,7 +107,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             return;
         }
         let cfg = &self.config;
-        let mut delta = to_fixed(cfg.miss);
+        let mut delta = f.miss;
         if b.surface & bit != 0 && cfg.miss_model == MissModel::NdtOm {
             if let Some(vs) = self.voxels.find(key.packed()) {
                 let v = &self.voxels.slots[vs];
@@ -120,7 +120,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 }
             }
         }
-        let (lo, hi) = (to_fixed(cfg.clamp_min), to_fixed(cfg.clamp_max));
+        let (lo, hi) = f.clamp;
         let b = &mut self.blocks.slots[bs];
         b.missed |= bit;
         b.add_logodds(cell, delta, lo, hi);

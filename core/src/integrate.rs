@@ -82,6 +82,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             on_phase(Phase::Points);
             batch.load_points(chunk);
             batch.convert(&f);
+            batch.set_labels(|j| chunk[j].labels, &self.config, C);
             batch.hash_points();
             on_phase(Phase::Accumulate);
             self.accumulate(&mut f, &batch, |j| chunk[j].labels);
@@ -127,15 +128,30 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 on_phase(Phase::Points);
                 batch.load_pixels(image, &rays, (row, col0, n));
                 batch.convert(&f);
-                if !matches!(image.labels, LabelImage::None) {
-                    batch.hash_points();
-                }
+                self.set_pixel_labels(&mut batch, image, row * w + col0);
                 on_phase(Phase::Accumulate);
                 self.accumulate_pixels(&mut f, &batch, image, row * w + col0);
                 done += n;
             }
         }
         Ok(self.finish(f, on_phase))
+    }
+
+    /// The labels (and vote hashes) of a batch of pixels starting at pixel `first`.
+    fn set_pixel_labels(&self, batch: &mut Batch, image: &DepthImage<'_>, first: usize) {
+        let stride = image.stride as usize;
+        match image.labels {
+            LabelImage::None => batch.clear_labels(),
+            LabelImage::Top1(l) => {
+                batch.set_top1_labels(l.get(first..).unwrap_or(&[]), stride, C);
+                batch.hash_points();
+            }
+            LabelImage::TopK(l) => {
+                let at = |j: usize| l.get(first + j * stride).copied().unwrap_or(Labels::NONE);
+                batch.set_labels(at, &self.config, C);
+                batch.hash_points();
+            }
+        }
     }
 
     /// The accumulation stage for a batch of pixels starting at pixel `first`, with the

@@ -2,7 +2,8 @@
 //! of the synthetic living room (the frames `sndt synth --scenes 1 --frames 12
 //! --no-predictions` writes, here with exact depth and ground-truth labels).
 //!
-//! `cargo bench -p sndt-host --bench update` prints, per cell size, single thread:
+//! `cargo bench -p sndt-host --bench update [-- CELL...]` prints, per cell size (default
+//! 0.05 0.10 0.15 0.20 m), single thread:
 //! - ms/frame: median, min and max over the 12 frames of a warm pass (the map's memory
 //!   touched by an earlier pass, then reset);
 //! - ns/point per phase ([`sndt_core::Phase`]) from a third pass that reports its phases:
@@ -42,17 +43,27 @@ fn main() {
         "voxels",
         "blocks"
     );
-    for cell in CELLS {
-        bench_cell(&frames, cell);
+    // `cargo bench` passes `--bench`; other arguments are cell sizes.
+    let cells: Vec<f32> = std::env::args()
+        .skip(1)
+        .filter_map(|a| a.parse().ok())
+        .collect();
+    for cell in if cells.is_empty() { &CELLS[..] } else { &cells } {
+        bench_cell(&frames, *cell);
     }
     println!("(ms: whole integrate_depth per frame; the other columns: ns per pixel, by phase)");
 }
 
 /// The 12 frames, rendered once.
 fn living_room() -> Vec<Frame> {
+    // SNDT_BENCH_FRAMES=N: fewer frames (for profilers that run the bench slowly).
+    let frames = std::env::var("SNDT_BENCH_FRAMES")
+        .ok()
+        .and_then(|n| n.parse().ok())
+        .unwrap_or(12);
     let split = Synthetic::new(SynthOptions {
         scenes: 1,
-        frames: 12,
+        frames,
         predictions: false,
         ..SynthOptions::default()
     })
