@@ -12,11 +12,11 @@
 //!    which handles and counts every case.
 
 use crate::camera::{DepthImage, DepthKind, PixelRays};
+use crate::config::Config;
 use crate::frame::{accumulator_index, FrameState};
 use crate::key::VoxelKey;
 use crate::labels::{LabeledPoint, Labels};
 use crate::map::Map;
-use crate::config::Config;
 use crate::votes::{takes_vote, vote_hash, voting_classes};
 use crate::voxel::packed_offsets;
 
@@ -162,8 +162,8 @@ impl Batch {
                 k[i] = ((m >> f.quant_bits) + 32768) as u32 & 0xffff;
                 q[i] = (m & f.quant_mask) - f.qhalf + ((t - m as f32) >= 0.5) as i32;
             }
-            for i in 0..3 {
-                self.q[i][j] = q[i];
+            for (axis, qi) in self.q.iter_mut().zip(q) {
+                axis[j] = qi;
             }
             self.key_x[j] = k[0];
             self.key_yz[j] = (k[1] << 16) | k[2];
@@ -172,8 +172,8 @@ impl Batch {
         }
         for j in 0..n {
             let w = packed_offsets([self.q[0][j], self.q[1][j], self.q[2][j]]);
-            for i in 0..3 {
-                self.w[i][j] = w[i];
+            for (axis, wi) in self.w.iter_mut().zip(w) {
+                axis[j] = wi;
             }
         }
     }

@@ -5,9 +5,11 @@
 pub(crate) struct Dda {
     /// Current voxel.
     pub(crate) k: [i32; 3],
-    step: [i32; 3],
-    t_max: [f32; 3],
-    t_delta: [f32; 3],
+    /// Per axis: the direction of travel (-1, 0 or 1), the ray parameter of the next
+    /// boundary and the parameter between boundaries.
+    pub(crate) step: [i32; 3],
+    pub(crate) t_max: [f32; 3],
+    pub(crate) t_delta: [f32; 3],
 }
 
 impl Dda {

@@ -127,10 +127,11 @@ pub(crate) fn accumulator_index(key: u64) -> usize {
 /// sensor many times per frame, and a hash lookup costs a cache miss or two.
 pub(crate) const BLOCK_CACHE: usize = 256;
 
-/// The block cache entry of a packed block key: the low 3, 3 and 2 bits of its x, y and z.
+/// The block cache entry of a packed block key: a multiplicative hash, as the blocks
+/// along one ray (up to dozens in a row on one axis) must not evict each other.
 #[inline]
 fn block_cache_index(packed: u64) -> usize {
-    (((packed >> 32) & 0x7) | ((packed >> 13) & 0x38) | ((packed & 0x3) << 6)) as usize
+    (packed.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> (64 - BLOCK_CACHE.trailing_zeros())) as usize
 }
 
 /// Per-frame state; lives on the stack during one integration.

@@ -13,7 +13,7 @@ use crate::config::{to_fixed, Config, MissModel};
 use crate::dda::Dda;
 use crate::frame::FrameState;
 use crate::gaussian::{PrepCache, Prepared};
-use crate::key::VoxelKey;
+use crate::key::{VoxelKey, KEY_LIMIT};
 use crate::map::Map;
 use crate::table::{Entry, NIL};
 use crate::voxel::Voxel;
@@ -86,30 +86,115 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             f.origin_key.z as i32,
         ];
         let e = [end.x as i32, end.y as i32, end.z as i32];
-        traverse(o, target, start, e, include_end, |k| {
-            self.miss(f, cache, &ray, &k);
-        });
+        self.walk(f, cache, &ray, (o, target), (start, e), include_end);
     }
 
-    /// The miss of the voxel with key components `k` for `ray`, once per frame.
-    fn miss(&mut self, f: &mut FrameState, cache: &mut GaussCache, ray: &Ray, k: &[i32; 3]) {
-        let Some(key) = VoxelKey::from_ints(k[0], k[1], k[2]) else {
-            return;
-        };
-        let Some(bs) = self.frame_block(f, key.block(), false) else {
-            f.report.dropped_misses = f.report.dropped_misses.saturating_add(1);
-            return;
-        };
-        let cell = key.cell();
-        let bit = 1u64 << cell;
-        let b = &self.blocks.slots[bs];
-        if b.missed & bit != 0 {
-            return;
+    /// The traversal of [`traverse`] (same voxels, same order), specialised for misses: the
+    /// block and the cell index are tracked as the walk steps (a ray stays about four steps
+    /// in a block), so a voxel that already has its miss costs one step and one bit test;
+    /// most visits are such voxels, as the rays of a frame share their start. The walk
+    /// state stays in scalars and steps without branching on the axis (an array indexed
+    /// by the axis would go through memory on every step).
+    fn walk(
+        &mut self,
+        f: &mut FrameState,
+        cache: &mut GaussCache,
+        ray: &Ray,
+        (o, target): ([f32; 3], [f32; 3]),
+        (start, end): ([i32; 3], [i32; 3]),
+        include_end: bool,
+    ) {
+        let d = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
+        let dda = Dda::new(o, d, start);
+        let [s0, s1, s2] = dda.step;
+        let [d0, d1, d2] = dda.t_delta;
+        let [mut t0, mut t1, mut t2] = dda.t_max;
+        let [mut k0, mut k1, mut k2] = start;
+        let steps: u32 = (0..3).map(|a| (end[a] - start[a]).unsigned_abs()).sum();
+        let mut at = self.enter_block(f, start);
+        // Overshooting the end by a few voxels stays in range unless an end is near it.
+        let near_limit = start
+            .iter()
+            .chain(&end)
+            .any(|c| c.unsigned_abs() > KEY_LIMIT as u32 - 8);
+        for _ in 0..=steps {
+            let at_end = k0 == end[0] && k1 == end[1] && k2 == end[2];
+            if at_end && !include_end {
+                return;
+            }
+            match at {
+                Some((bs, cell)) => {
+                    if self.blocks.slots[bs].missed & (1u64 << cell) == 0 {
+                        self.miss(f, cache, ray, &[k0, k1, k2], bs, cell);
+                    }
+                }
+                None => f.report.dropped_misses = f.report.dropped_misses.saturating_add(1),
+            }
+            if at_end {
+                return;
+            }
+            // The next boundary: the lowest axis on ties, as `Dda::next_axis`.
+            let y = t1 < t0;
+            let t01 = if y { t1 } else { t0 };
+            let z = t2 < t01;
+            let x = !y && !z;
+            let y = y && !z;
+            if (if z { t2 } else { t01 }) > 1.0 + 1e-4 {
+                return;
+            }
+            let before = [k0, k1, k2];
+            k0 += if x { s0 } else { 0 };
+            k1 += if y { s1 } else { 0 };
+            k2 += if z { s2 } else { 0 };
+            t0 = if x { t0 + d0 } else { t0 };
+            t1 = if y { t1 + d1 } else { t1 };
+            t2 = if z { t2 + d2 } else { t2 };
+            // An axis moves monotonically from the sensor's valid key towards the end's
+            // valid key: leaving the key range means overshooting, with nothing valid after.
+            if near_limit && (k0.max(k1).max(k2) > KEY_LIMIT || k0.min(k1).min(k2) < -KEY_LIMIT) {
+                return;
+            }
+            let crossed = ((before[0] ^ k0) | (before[1] ^ k1) | (before[2] ^ k2)) & !3 != 0;
+            at = match at {
+                Some((bs, cell)) if !crossed => {
+                    let stride = if x {
+                        s0
+                    } else if y {
+                        4 * s1
+                    } else {
+                        16 * s2
+                    };
+                    Some((bs, (cell as i32 + stride) as u32))
+                }
+                _ => self.enter_block(f, [k0, k1, k2]),
+            };
         }
+    }
+
+    /// The block slot and cell index of voxel `k` (`None` when the map has no room for
+    /// the block).
+    fn enter_block(&mut self, f: &mut FrameState, k: [i32; 3]) -> Option<(usize, u32)> {
+        let key = VoxelKey::from_ints(k[0], k[1], k[2])?;
+        Some((self.frame_block(f, key.block(), false)?, key.cell()))
+    }
+
+    /// The miss of voxel `k` (in block slot `bs`, cell `cell`, without a miss yet this
+    /// frame) for `ray`.
+    fn miss(
+        &mut self,
+        f: &mut FrameState,
+        cache: &mut GaussCache,
+        ray: &Ray,
+        k: &[i32; 3],
+        bs: usize,
+        cell: u32,
+    ) {
+        let bit = 1u64 << cell;
         let cfg = &self.config;
         let mut delta = f.miss;
-        if b.surface & bit != 0 && cfg.miss_model == MissModel::NdtOm {
-            if let Some(vs) = self.voxels.find(key.packed()) {
+        if self.blocks.slots[bs].surface & bit != 0 && cfg.miss_model == MissModel::NdtOm {
+            let packed = VoxelKey::from_ints(k[0], k[1], k[2]).map_or(0, |key| key.packed());
+            if let Some(vs) = self.voxels.find(packed) {
                 let v = &self.voxels.slots[vs];
                 if v.n >= cfg.n_min {
                     let g = cache.get(vs, || v.prepared(cfg));

@@ -333,7 +333,12 @@ mod tests {
             plain.add(*q);
             packed.add(&packed_offsets(*q));
             let u = packed.unbias();
-            assert_eq!((u.n, u.s1, u.s2), (plain.n, plain.s1, plain.s2), "after {} points", i + 1);
+            assert_eq!(
+                (u.n, u.s1, u.s2),
+                (plain.n, plain.s1, plain.s2),
+                "after {} points",
+                i + 1
+            );
         }
         // All offsets at +32: every product field at its largest.
         let mut full = PackedSums::EMPTY;
