@@ -22,7 +22,7 @@ use crate::voxel::packed_offsets;
 
 /// Points per batch: large enough that the per-batch work vanishes, small enough for a
 /// microcontroller's stack (a batch is about 4 KiB).
-pub(crate) const BATCH: usize = 128;
+pub(crate) const BATCH: usize = 64;
 
 /// The common case: finite, inside max range and the key range, labels that fit the map
 /// with at most one voting class.

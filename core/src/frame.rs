@@ -57,7 +57,7 @@ pub struct FrameReport {
 /// the steps: the time until the next report belongs to this step).
 ///
 /// Phase 1 alternates between [`Phase::Points`] and [`Phase::Accumulate`] once per batch
-/// of up to 128 points; the other phases are reported once per frame.
+/// of up to 64 points; the other phases are reported once per frame.
 ///
 /// ```
 /// use sndt_core::{Config, Isometry3, LabeledPoint, Labels, Map, Phase, Point3};
@@ -125,7 +125,7 @@ pub(crate) fn accumulator_index(key: u64) -> usize {
 
 /// Entries of the frame's block cache: rays and points revisit the blocks around the
 /// sensor many times per frame, and a hash lookup costs a cache miss or two.
-pub(crate) const BLOCK_CACHE: usize = 256;
+pub(crate) const BLOCK_CACHE: usize = 128;
 
 /// The block cache entry of a packed block key: a multiplicative hash, as the blocks
 /// along one ray (up to dozens in a row on one axis) must not evict each other.
@@ -361,7 +361,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
 
     /// Ends the frame: counts it and its losses in the map's totals, and completes its
     /// report with the evictions it caused.
-    pub(crate) fn close_frame(&mut self, mut f: FrameState) -> FrameReport {
+    pub(crate) fn close_frame(&mut self, f: &mut FrameState) -> FrameReport {
         self.stats.frames = self.stats.frames.wrapping_add(1);
         self.stats.dropped_points += f.report.dropped_points as u64;
         self.stats.dropped_misses += f.report.dropped_misses as u64;

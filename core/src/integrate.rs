@@ -87,7 +87,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             on_phase(Phase::Accumulate);
             self.accumulate(&mut f, &batch, |j| chunk[j].labels);
         }
-        Ok(self.finish(f, on_phase))
+        Ok(self.finish(&mut f, on_phase))
     }
 
     /// [`Map::integrate_depth`], reporting the start of every [`Phase`] to `on_phase`.
@@ -134,7 +134,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 done += n;
             }
         }
-        Ok(self.finish(f, on_phase))
+        Ok(self.finish(&mut f, on_phase))
     }
 
     /// The labels (and vote hashes) of a batch of pixels starting at pixel `first`.
@@ -179,13 +179,13 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     /// Phases 2 and 3 after the frame's last point, then the frame's totals.
-    fn finish(&mut self, mut f: FrameState, mut on_phase: impl FnMut(Phase)) -> FrameReport {
+    fn finish(&mut self, f: &mut FrameState, mut on_phase: impl FnMut(Phase)) -> FrameReport {
         on_phase(Phase::EndVoxels);
-        self.flush_accumulators(&mut f);
+        self.flush_accumulators(f);
         let head = self.sort_frame_list(f.head);
-        self.update_end_voxels(&mut f, head);
+        self.update_end_voxels(f, head);
         on_phase(Phase::FreeSpace);
-        self.clear_free_space(&mut f, head);
+        self.clear_free_space(f, head);
         let report = self.close_frame(f);
         on_phase(Phase::Done);
         report

@@ -9,7 +9,7 @@
 //! - ns/point per phase ([`sndt_core::Phase`]) from a third pass that reports its phases:
 //!   `points` (pixel -> point -> key and offset), `accumulate` (lookup, sums, votes),
 //!   `end voxels` (one update per touched voxel) and `free space` (rays, misses), divided by
-//!   the frame's pixels; reporting the phases costs two clock reads per batch of 128 points.
+//!   the frame's pixels; reporting the phases costs two clock reads per batch of 64 points.
 
 use sndt_core::{Config, DepthImage, DepthKind, LabelImage, Phase};
 use sndt_host::dataset::frame::{Frame, Rays};
