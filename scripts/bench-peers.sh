@@ -19,7 +19,8 @@ cd "$(dirname "$0")/.."
 
 FRAMES=12
 CELLS=(0.05 0.10 0.20)
-WORK="${CARGO_TARGET_DIR:-target}/peers"
+# Absolute: cargo runs the bench binary from the package's directory.
+WORK="$(realpath -m "${CARGO_TARGET_DIR:-target}/peers")"
 DATA="$WORK/living-room"
 POINTS="$WORK/points.bin"
 HARNESS_SRC=scripts/peers/octomap_bench.cpp
