@@ -18,11 +18,12 @@
 //! computes it). Without a dataset argument (a plain `cargo bench`) it prints a note and
 //! exits successfully.
 
-use sndt_core::{Config, DepthImage, LabelImage};
-use sndt_host::dataset::frame::{Frame, Rays};
+mod common;
+
+use common::{median, warm_timed_pass};
+use sndt_core::Config;
+use sndt_host::dataset::frame::Frame;
 use sndt_host::dataset::open::open_spec;
-use sndt_host::semantic_map::{boxed_map, HostMap};
-use std::time::Instant;
 
 const CELLS: [f32; 3] = [0.05, 0.10, 0.20];
 
@@ -62,30 +63,11 @@ fn load(spec: &str, count: usize) -> Vec<Frame> {
         .collect()
 }
 
-/// The frame as the core's depth image: every pixel, ground-truth labels.
-fn image(frame: &Frame) -> DepthImage<'_> {
-    let Rays::Pinhole(camera) = frame.rays.as_ref() else {
-        panic!("{}: the peer benchmark needs a pinhole camera", frame.id);
-    };
-    DepthImage {
-        camera: *camera,
-        depth: &frame.depth,
-        kind: frame.depth_kind,
-        labels: LabelImage::Top1(frame.labels.as_deref().expect("ground-truth labels")),
-        stride: 1,
-    }
-}
-
 /// One line: a warm-up pass, `reset`, then the timed pass.
 fn bench_cell(frames: &[Frame], cell: f32) {
-    let config = Config::with_cell_size(cell);
-    let mut map: Box<HostMap> = boxed_map(config).expect("valid config");
-    integrate_all(&mut map, frames);
-    map.reset(config).expect("valid config");
-    let mut ms = integrate_all(&mut map, frames);
-    ms.sort_by(f64::total_cmp);
+    let (map, ms) = warm_timed_pass(Config::with_cell_size(cell), frames);
     let n = ms.len();
-    let median = (ms[(n - 1) / 2] + ms[n / 2]) / 2.0;
+    let median = median(&ms);
     println!(
         "sndt cell={cell:.2} median_ms={median:.3} min_ms={:.3} max_ms={:.3} voxels={} blocks={}",
         ms[0],
@@ -93,26 +75,4 @@ fn bench_cell(frames: &[Frame], cell: f32) {
         map.len(),
         map.block_count()
     );
-}
-
-/// Integrates every frame; the time of each in ms. Panics if the map dropped or evicted
-/// anything (the benchmark would then time a smaller map).
-fn integrate_all(map: &mut HostMap, frames: &[Frame]) -> Vec<f64> {
-    frames
-        .iter()
-        .map(|f| {
-            let img = image(f);
-            let t = Instant::now();
-            let report = map
-                .integrate_depth(&f.pose, &img)
-                .expect("frame integrates");
-            let ms = t.elapsed().as_secs_f64() * 1e3;
-            assert_eq!(
-                report.dropped_points + report.voxels_evicted,
-                0,
-                "bench map too small"
-            );
-            ms
-        })
-        .collect()
 }

@@ -11,11 +11,13 @@
 //!   `end voxels` (one update per touched voxel) and `free space` (rays, misses), divided by
 //!   the frame's pixels; reporting the phases costs two clock reads per batch of 64 points.
 
-use sndt_core::{Config, DepthImage, DepthKind, LabelImage, Phase};
-use sndt_host::dataset::frame::{Frame, Rays};
+mod common;
+
+use common::{image, median, warm_timed_pass};
+use sndt_core::{Config, Phase};
+use sndt_host::dataset::frame::Frame;
 use sndt_host::dataset::source::Dataset;
 use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
-use sndt_host::semantic_map::{boxed_map, HostMap};
 use std::time::{Duration, Instant};
 
 const CELLS: [f32; 4] = [0.05, 0.10, 0.15, 0.20];
@@ -75,28 +77,10 @@ fn living_room() -> Vec<Frame> {
         .collect()
 }
 
-/// The frame as the core's depth image with ground-truth labels.
-fn image(frame: &Frame) -> DepthImage<'_> {
-    let Rays::Pinhole(camera) = frame.rays.as_ref() else {
-        panic!("the synthetic camera is a pinhole");
-    };
-    DepthImage {
-        camera: *camera,
-        depth: &frame.depth,
-        kind: DepthKind::Planar,
-        labels: LabelImage::Top1(frame.labels.as_deref().expect("ground truth")),
-        stride: 1,
-    }
-}
-
 /// One row of the table: a warm-up pass, a timed pass and a pass timed by phase.
 fn bench_cell(frames: &[Frame], cell: f32) {
     let config = Config::with_cell_size(cell);
-    let mut map: Box<HostMap> = boxed_map(config).expect("valid config");
-    integrate_all(&mut map, frames);
-    map.reset(config).expect("valid config");
-    let mut ms = integrate_all(&mut map, frames);
-    ms.sort_by(f64::total_cmp);
+    let (mut map, ms) = warm_timed_pass(config, frames);
     map.reset(config).expect("valid config");
     let mut phases = [Duration::ZERO; 5];
     let mut rays = 0u64;
@@ -125,7 +109,7 @@ fn bench_cell(frames: &[Frame], cell: f32) {
     println!(
         "{:>3.0}cm | {:>7.2} {:>7.2} {:>7.2} | {:>6.2} {:>10.2} {:>9.2} {:>9.2} {:>7.2} | {:>6} {:>7} {:>6}",
         cell * 100.0,
-        ms[ms.len() / 2],
+        median(&ms),
         ms[0],
         ms[ms.len() - 1],
         ns(phases[Phase::Points as usize]),
@@ -137,18 +121,4 @@ fn bench_cell(frames: &[Frame], cell: f32) {
         map.len(),
         map.block_count()
     );
-}
-
-/// Integrates every frame; the time of each in ms.
-fn integrate_all(map: &mut HostMap, frames: &[Frame]) -> Vec<f64> {
-    frames
-        .iter()
-        .map(|f| {
-            let img = image(f);
-            let t = Instant::now();
-            map.integrate_depth(&f.pose, &img)
-                .expect("frame integrates");
-            t.elapsed().as_secs_f64() * 1e3
-        })
-        .collect()
 }

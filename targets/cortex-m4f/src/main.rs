@@ -25,7 +25,7 @@ use defmt_semihosting as _;
 use heapless::Vec;
 use sndt_core::{
     pose_from_matrix, Config, DepthImage, DepthKind, FrameReport, Isometry3, LabelImage, Map,
-    Matrix3, Point3, RayHit, Vector3,
+    Matrix3, Phase, Point3, RayHit, Vector3,
 };
 use vector::{Frame, Vector};
 
@@ -161,6 +161,7 @@ fn timed<T>(syst: &mut SYST, f: impl FnOnce() -> T) -> (T, Timing) {
 fn integrate_frames(map: &mut FwMap, syst: &mut SYST, v: &Vector<'_>) -> Result<bool, Abort> {
     let mut ok = true;
     let (mut total_ticks, mut total_cycles) = (0u32, 0u32);
+    let mut phases = [0u32; 5];
     for k in 0..v.frames {
         let f = v.frame(k).map_err(|e| {
             defmt::error!("frame {=usize}: {}", k, e);
@@ -177,7 +178,7 @@ fn integrate_frames(map: &mut FwMap, syst: &mut SYST, v: &Vector<'_>) -> Result<
             labels: LabelImage::Top1(f.labels),
             stride: 1,
         };
-        let (result, time) = timed(syst, || map.integrate_depth(&pose, &image));
+        let (result, time) = timed(syst, || integrate_observed(map, &pose, &image, &mut phases));
         total_cycles = total_cycles.saturating_add(time.cycles);
         match result {
             Ok(rep) => {
@@ -198,6 +199,14 @@ fn integrate_frames(map: &mut FwMap, syst: &mut SYST, v: &Vector<'_>) -> Result<
         }
     }
     let frames = v.frames.max(1) as u32;
+    let per = |p: Phase| phases[p as usize] / frames;
+    defmt::println!(
+        "systick per frame by phase: points {=u32}, accumulate {=u32}, end voxels {=u32}, free space {=u32}",
+        per(Phase::Points),
+        per(Phase::Accumulate),
+        per(Phase::EndVoxels),
+        per(Phase::FreeSpace)
+    );
     defmt::println!(
         "systick per frame {=u32}, dwt cycles per frame {=u32} (means over {=u32} frames; cycles are 0 without a cycle counter, as in QEMU)",
         total_ticks / frames,
@@ -205,6 +214,26 @@ fn integrate_frames(map: &mut FwMap, syst: &mut SYST, v: &Vector<'_>) -> Result<
         frames
     );
     Ok(ok)
+}
+
+/// `Map::integrate_depth`, adding the SysTick ticks of each integration phase to `phases`
+/// (indexed by `Phase as usize`; the counter counts down and wraps at 2^24).
+fn integrate_observed(
+    map: &mut FwMap,
+    pose: &Isometry3<f32>,
+    image: &DepthImage<'_>,
+    phases: &mut [u32; 5],
+) -> Result<FrameReport, sndt_core::Error> {
+    let mut last = SYST::get_current();
+    let mut current: Option<Phase> = None;
+    map.integrate_depth_observed(pose, image, |p| {
+        let now = SYST::get_current();
+        if let Some(c) = current {
+            let ticks = last.wrapping_sub(now) & 0x00ff_ffff;
+            phases[c as usize] = phases[c as usize].saturating_add(ticks);
+        }
+        (last, current) = (now, Some(p));
+    })
 }
 
 /// One line per integrated frame.
