@@ -111,7 +111,10 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let [mut t0, mut t1, mut t2] = dda.t_max;
         let [mut k0, mut k1, mut k2] = start;
         let steps: u32 = (0..3).map(|a| (end[a] - start[a]).unsigned_abs()).sum();
+        let strides = [s0, 4 * s1, 16 * s2];
         let mut at = self.enter_block(f, start);
+        // The current block's `missed` mask; only this walk's own misses change it.
+        let mut missed = at.map_or(0, |(bs, _)| self.blocks.slots[bs].missed);
         // Overshooting the end by a few voxels stays in range unless an end is near it.
         let near_limit = start
             .iter()
@@ -124,8 +127,9 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             }
             match at {
                 Some((bs, cell)) => {
-                    if self.blocks.slots[bs].missed & (1u64 << cell) == 0 {
+                    if missed & (1u64 << cell) == 0 {
                         self.miss(f, cache, ray, &[k0, k1, k2], bs, cell);
+                        missed = self.blocks.slots[bs].missed;
                     }
                 }
                 None => f.report.dropped_misses = f.report.dropped_misses.saturating_add(1),
@@ -157,16 +161,20 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             let crossed = ((before[0] ^ k0) | (before[1] ^ k1) | (before[2] ^ k2)) & !3 != 0;
             at = match at {
                 Some((bs, cell)) if !crossed => {
-                    let stride = if x {
-                        s0
+                    let stride = strides[if x {
+                        0
                     } else if y {
-                        4 * s1
+                        1
                     } else {
-                        16 * s2
-                    };
+                        2
+                    }];
                     Some((bs, (cell as i32 + stride) as u32))
                 }
-                _ => self.enter_block(f, [k0, k1, k2]),
+                _ => {
+                    let at = self.enter_block(f, [k0, k1, k2]);
+                    missed = at.map_or(0, |(bs, _)| self.blocks.slots[bs].missed);
+                    at
+                }
             };
         }
     }
