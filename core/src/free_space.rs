@@ -112,9 +112,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let [mut k0, mut k1, mut k2] = start;
         let steps: u32 = (0..3).map(|a| (end[a] - start[a]).unsigned_abs()).sum();
         let strides = [s0, 4 * s1, 16 * s2];
-        let mut at = self.enter_block(f, start);
-        // The current block's `missed` mask; only this walk's own misses change it.
-        let mut missed = at.map_or(0, |(bs, _)| self.blocks.slots[bs].missed);
+        // The current block's slot, cell and `missed` mask (only this walk changes it).
+        let (mut at, mut missed) = self.enter_block(f, start);
         // Overshooting the end by a few voxels stays in range unless an end is near it.
         let near_limit = start
             .iter()
@@ -159,31 +158,22 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 return;
             }
             let crossed = ((before[0] ^ k0) | (before[1] ^ k1) | (before[2] ^ k2)) & !3 != 0;
-            at = match at {
+            match at {
                 Some((bs, cell)) if !crossed => {
-                    let stride = strides[if x {
-                        0
-                    } else if y {
-                        1
-                    } else {
-                        2
-                    }];
-                    Some((bs, (cell as i32 + stride) as u32))
+                    let axis = if z { 2 } else { y as usize };
+                    at = Some((bs, (cell as i32 + strides[axis]) as u32));
                 }
-                _ => {
-                    let at = self.enter_block(f, [k0, k1, k2]);
-                    missed = at.map_or(0, |(bs, _)| self.blocks.slots[bs].missed);
-                    at
-                }
-            };
+                _ => (at, missed) = self.enter_block(f, [k0, k1, k2]),
+            }
         }
     }
 
     /// The block slot and cell index of voxel `k` (`None` when the map has no room for
-    /// the block).
-    fn enter_block(&mut self, f: &mut FrameState, k: [i32; 3]) -> Option<(usize, u32)> {
-        let key = VoxelKey::from_ints(k[0], k[1], k[2])?;
-        Some((self.frame_block(f, key.block(), false)?, key.cell()))
+    /// the block), and the block's `missed` mask.
+    fn enter_block(&mut self, f: &mut FrameState, k: [i32; 3]) -> (Option<(usize, u32)>, u64) {
+        let at = VoxelKey::from_ints(k[0], k[1], k[2])
+            .and_then(|key| Some((self.frame_block(f, key.block(), false)?, key.cell())));
+        (at, at.map_or(0, |(bs, _)| self.blocks.slots[bs].missed))
     }
 
     /// The miss of voxel `k` (in block slot `bs`, cell `cell`, without a miss yet this
