@@ -302,6 +302,24 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         Some(bs)
     }
 
+    /// Calls `visit(map, slot, block)` for every block on the frame's list from `head`, in
+    /// list order, with a copy of the block as it is when reached.
+    pub(crate) fn for_each_frame_block(
+        &mut self,
+        head: u32,
+        mut visit: impl FnMut(&mut Self, usize, Block),
+    ) {
+        let mut i = head;
+        while i != NIL {
+            let bs = (i - 1) as usize;
+            let Some(&b) = self.blocks.slots.get(bs) else {
+                return;
+            };
+            visit(self, bs, b);
+            i = b.frame_next;
+        }
+    }
+
     /// Bottom-up merge sort of the frame's block list by packed key (no allocation).
     pub(crate) fn sort_frame_list(&mut self, head: u32) -> u32 {
         let key = |m: &Self, i: u32| m.blocks.slots[(i - 1) as usize].packed_key();

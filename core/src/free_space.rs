@@ -15,7 +15,7 @@ use crate::frame::FrameState;
 use crate::gaussian::{PrepCache, Prepared};
 use crate::key::{VoxelKey, KEY_LIMIT};
 use crate::map::Map;
-use crate::table::{Entry, NIL};
+use crate::table::Entry;
 use crate::voxel::Voxel;
 use nalgebra::Vector3;
 
@@ -36,24 +36,20 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// `head`: to every hit voxel, then to every truncated end that got no points.
     pub(crate) fn clear_free_space(&mut self, f: &mut FrameState, head: u32) {
         let mut cache = GaussCache::new();
-        let mut i = head;
-        while i != NIL {
-            let bs = (i - 1) as usize;
-            let b = self.blocks.slots[bs];
+        self.for_each_frame_block(head, |map, _, b| {
             for cell in bits(b.hit) {
                 let key = VoxelKey::from_block_cell(b.packed_key(), cell);
-                let target = match self.voxels.find(key.packed()) {
-                    Some(vs) => mean_in_voxel(&self.voxels.slots[vs], &key, f.qscale),
+                let target = match map.voxels.find(key.packed()) {
+                    Some(vs) => mean_in_voxel(&map.voxels.slots[vs], &key, f.qscale),
                     None => centre(&key),
                 };
-                self.cast(f, &mut cache, target, &key, false);
+                map.cast(f, &mut cache, target, &key, false);
             }
             for cell in bits(b.far & !b.hit) {
                 let key = VoxelKey::from_block_cell(b.packed_key(), cell);
-                self.cast(f, &mut cache, centre(&key), &key, true);
+                map.cast(f, &mut cache, centre(&key), &key, true);
             }
-            i = b.frame_next;
-        }
+        });
     }
 
     /// Exact voxel traversal (Amanatides & Woo) from the sensor to `target` (in voxel

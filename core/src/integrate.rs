@@ -25,7 +25,7 @@ use crate::frame::{FrameReport, FrameState, Phase, MAX_FRAME_POINTS};
 use crate::key::VoxelKey;
 use crate::labels::{LabeledPoint, Labels};
 use crate::map::Map;
-use crate::table::{Entry, NIL};
+use crate::table::Entry;
 use nalgebra::Isometry3;
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
@@ -197,22 +197,18 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let cfg = self.config;
         let (lo, hi) = (to_fixed(cfg.clamp_min), to_fixed(cfg.clamp_max));
         let hit = to_fixed(cfg.hit);
-        let mut i = head;
-        while i != NIL {
-            let bs = (i - 1) as usize;
-            let b = self.blocks.slots[bs];
+        self.for_each_frame_block(head, |map, bs, b| {
             for cell in bits(b.hit) {
                 let key = VoxelKey::from_block_cell(b.packed_key(), cell);
-                if let Some(vs) = self.voxels.find(key.packed()) {
-                    let v = &mut self.voxels.slots[vs];
+                if let Some(vs) = map.voxels.find(key.packed()) {
+                    let v = &mut map.voxels.slots[vs];
                     v.decay(cfg.n_max);
                     v.end_vote_sample(cfg.votes_per_frame);
                 }
-                self.blocks.slots[bs].add_logodds(cell, hit, lo, hi);
+                map.blocks.slots[bs].add_logodds(cell, hit, lo, hi);
                 f.report.end_voxels += 1;
             }
-            i = b.frame_next;
-        }
+        });
     }
 }
 
