@@ -96,23 +96,30 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         if f.acc[a].key != key {
             self.open_accumulator(f, a, vs, key);
         }
-        self.add_to_accumulator(f, a, &packed_offsets(q));
+        self.add_to_accumulator(f, a, &packed_offsets(q), 1);
     }
 
-    /// Adds a point's [`packed_offsets`] to accumulator `a`, which must hold the point's
-    /// voxel; a full accumulator is added to its voxel first.
+    /// Adds the sum `w` of the [`packed_offsets`] of `n <= 64` points to accumulator
+    /// `a`, which must hold their voxel; an accumulator that could overflow is added to
+    /// its voxel first.
     #[inline]
-    pub(crate) fn add_to_accumulator(&mut self, f: &mut FrameState, a: usize, w: &[u64; 3]) {
+    pub(crate) fn add_to_accumulator(
+        &mut self,
+        f: &mut FrameState,
+        a: usize,
+        w: &[u64; 3],
+        n: u32,
+    ) {
         let Some(acc) = f.acc.get_mut(a) else {
             return;
         };
-        if acc.sums.n == PackedSums::MAX_POINTS {
+        if acc.sums.n + n > PackedSums::MAX_POINTS {
             if let Some(v) = self.voxels.slots.get_mut(acc.slot) {
                 v.merge(&acc.sums.unbias());
             }
             acc.sums = PackedSums::EMPTY;
         }
-        acc.sums.add(w);
+        acc.sums.add(w, n);
     }
 
     /// Makes accumulator `a` hold voxel slot `vs` (packed key `key`), adding the points

@@ -17,12 +17,20 @@ use crate::frame::{accumulator_index, FrameState};
 use crate::key::VoxelKey;
 use crate::labels::{LabeledPoint, Labels};
 use crate::map::Map;
-use crate::votes::{takes_vote, vote_hash, voting_classes};
+#[cfg(doc)]
+use crate::votes::takes_vote;
+use crate::votes::{vote_hash, voting_classes, MAX_VOTE_EXPONENT};
 use crate::voxel::packed_offsets;
 
 /// Points per batch: large enough that the per-batch work vanishes, small enough for a
 /// microcontroller's stack (a batch is about 4 KiB).
 pub(crate) const BATCH: usize = 64;
+
+/// Image columns per tile: a depth image goes through phase 1 in tiles of `TILE_COLS`
+/// columns by `BATCH / TILE_COLS` rows, one batch each. A tile covers few voxels, which
+/// stay in their accumulators from one tile to the next along a strip of rows; batches of
+/// one row would look every voxel of a row up again for the next row.
+pub(crate) const TILE_COLS: usize = 8;
 
 /// The common case: finite, inside max range and the key range, labels that fit the map
 /// with at most one voting class.
@@ -47,6 +55,9 @@ pub(crate) struct Batch {
     /// contribution to the voxel's sums (`packed_offsets`).
     q: [[i32; BATCH]; 3],
     w: [[u64; BATCH]; 3],
+    /// Where each point came from: its pixel index in the image, or its index in the
+    /// slice of points.
+    pub(crate) pixel: [usize; BATCH],
     /// The class a point votes for (0: none).
     vote: [u8; BATCH],
     /// Vote-sampling hashes of the sensor points ([`crate::vote_hash`]), when computed.
@@ -63,6 +74,7 @@ impl Batch {
             key_yz: [0; BATCH],
             q: [[0; BATCH]; 3],
             w: [[0; BATCH]; 3],
+            pixel: [0; BATCH],
             vote: [0; BATCH],
             hash: [0; BATCH],
             status: [FAST; BATCH],
@@ -77,38 +89,45 @@ impl Batch {
             self.p[1][j] = lp.position.y;
             self.p[2][j] = lp.position.z;
             self.status[j] = FAST;
+            self.pixel[j] = j;
         }
     }
 
-    /// Loads `n <= BATCH` pixels of image row `row` from column `col0` on, at the image's
-    /// stride, as [`crate::depth_point`] turns them into points.
-    pub(crate) fn load_pixels(
+    /// Loads a tile of the image: `n <= TILE_COLS` pixels (at the image's stride) from
+    /// column `col0` on, in each of `rows` (as many as fit), as [`crate::depth_point`]
+    /// turns them into points.
+    pub(crate) fn load_tile(
         &mut self,
         image: &DepthImage<'_>,
         rays: &PixelRays,
-        (row, col0, n): (usize, usize, usize),
+        rows: impl Iterator<Item = usize>,
+        (col0, n): (usize, usize),
     ) {
         let stride = image.stride as usize;
-        let first = row * image.camera.width as usize + col0;
-        let depth = image.depth.get(first..).unwrap_or(&[]);
-        let y = rays.y(row);
-        let n = n.min(BATCH);
-        match (image.kind, stride) {
-            (DepthKind::Planar, 1) => self.load_row(depth.iter().take(n), |j| rays.x(col0 + j), y),
-            (DepthKind::Planar, _) => self.load_row(
-                depth.iter().step_by(stride).take(n),
-                |j| rays.x(col0 + j * stride),
-                y,
-            ),
-            (DepthKind::Range, _) => {
-                self.load_row(
-                    depth.iter().step_by(stride).take(n),
-                    |j| rays.x(col0 + j * stride),
-                    y,
-                );
-                for j in 0..self.len {
+        let n = n.min(TILE_COLS);
+        let mut xs = [0.0f32; TILE_COLS];
+        for (j, x) in xs.iter_mut().enumerate().take(n) {
+            *x = rays.x(col0 + j * stride);
+        }
+        self.len = 0;
+        for row in rows {
+            let first = row * image.camera.width as usize + col0;
+            let depth = image.depth.get(first..).unwrap_or(&[]);
+            let start = self.len.min(BATCH);
+            let y = rays.y(row);
+            let end = match (stride, depth.get(..n)) {
+                (1, Some(depth)) if n == TILE_COLS => self.put_full_row(&xs, y, depth, start),
+                (1, _) => self.put_row(&xs[..n], y, depth.iter(), start),
+                _ => self.put_row(&xs[..n], y, depth.iter().step_by(stride), start),
+            };
+            for (j, pixel) in self.pixel[start..end].iter_mut().enumerate() {
+                *pixel = first + j * stride;
+            }
+            self.len = end;
+            if image.kind == DepthKind::Range {
+                for j in start..end {
                     // Undo the planar scaling: scale = d / |ray| instead of d.
-                    let (x, d) = (rays.x(col0 + j * stride), self.p[2][j]);
+                    let (x, d) = (xs[j - start], self.p[2][j]);
                     let scale = d / libm::sqrtf(x * x + y * y + 1.0);
                     self.p[0][j] = x * scale;
                     self.p[1][j] = y * scale;
@@ -116,31 +135,70 @@ impl Batch {
                 }
             }
         }
-    }
-
-    /// Planar points `d * (x(j), y, 1)` for the depths `depths`.
-    #[inline]
-    fn load_row<'a>(
-        &mut self,
-        depths: impl Iterator<Item = &'a f32>,
-        x: impl Fn(usize) -> f32,
-        y: f32,
-    ) {
-        let mut n = 0;
-        for (j, &d) in depths.enumerate() {
-            let rx = x(j);
-            self.p[0][j] = rx * d;
-            self.p[1][j] = y * d;
-            self.p[2][j] = d;
-            // Written so that NaN fails: the same test as `depth_point`.
-            self.status[j] = if d > 0.0 && d < f32::INFINITY {
+        // z is the depth (or has its sign and finiteness); written so that NaN fails: the
+        // same test as `depth_point`.
+        let n = self.len.min(BATCH);
+        for (status, &z) in self.status[..n].iter_mut().zip(&self.p[2][..n]) {
+            *status = if z > 0.0 && z < f32::INFINITY {
                 FAST
             } else {
                 NO_DEPTH
             };
-            n = j + 1;
         }
-        self.len = n;
+    }
+
+    /// [`Batch::put_row`] for a whole row of a tile, in fixed-size arrays that compile
+    /// to a few vector instructions.
+    #[inline]
+    fn put_full_row(
+        &mut self,
+        xs: &[f32; TILE_COLS],
+        y: f32,
+        depth: &[f32],
+        start: usize,
+    ) -> usize {
+        let end = start + TILE_COLS;
+        let [p0, p1, p2] = &mut self.p;
+        let (Some(p0), Some(p1), Some(p2), Ok(depth)) = (
+            p0.get_mut(start..end),
+            p1.get_mut(start..end),
+            p2.get_mut(start..end),
+            <&[f32; TILE_COLS]>::try_from(depth),
+        ) else {
+            return start;
+        };
+        for j in 0..TILE_COLS {
+            let d = depth[j];
+            p0[j] = xs[j] * d;
+            p1[j] = y * d;
+            p2[j] = d;
+        }
+        end
+    }
+
+    /// Writes the planar points `d * (xs[j], y, 1)` of the depths `depth` from point
+    /// `start` on, one per ray in `xs` while depths last and the batch has room; returns
+    /// the end of the points written.
+    #[inline]
+    fn put_row<'a>(
+        &mut self,
+        xs: &[f32],
+        y: f32,
+        depth: impl Iterator<Item = &'a f32>,
+        start: usize,
+    ) -> usize {
+        let end = (start + xs.len()).min(BATCH);
+        let mut written = start;
+        let [p0, p1, p2] = &mut self.p;
+        let points = p0[start..end].iter_mut().zip(&mut p1[start..end]);
+        let points = points.zip(&mut p2[start..end]);
+        for ((x, ((p0, p1), p2)), &d) in xs.iter().zip(points).zip(depth) {
+            *p0 = x * d;
+            *p1 = y * d;
+            *p2 = d;
+            written += 1;
+        }
+        written
     }
 
     /// World coordinates, voxel keys, offsets and the status of every loaded point.
@@ -178,11 +236,12 @@ impl Batch {
         }
     }
 
-    /// Labels of pixels with one class each: `labels` from the batch's first pixel on, at
-    /// `stride`. A class id is the class it votes for (0, void, votes for nothing).
-    pub(crate) fn set_top1_labels(&mut self, labels: &[u8], stride: usize, classes: usize) {
+    /// Labels of pixels with one class each, from the label image `labels`. A class id is
+    /// the class it votes for (0, void, votes for nothing).
+    pub(crate) fn set_top1_labels(&mut self, labels: &[u8], classes: usize) {
         let n = self.len.min(BATCH);
-        for (j, &c) in labels.iter().step_by(stride.max(1)).take(n).enumerate() {
+        for j in 0..n {
+            let c = labels.get(self.pixel[j]).copied().unwrap_or(0);
             self.vote[j] = c;
             if c as usize > classes && self.status[j] == FAST {
                 self.status[j] = BAD_LABEL;
@@ -190,7 +249,7 @@ impl Batch {
         }
     }
 
-    /// Labels from `labels(j)` for every point, checked against the map's class count and
+    /// Labels from `labels(pixel)` for every point (see [`Batch::pixel`]), checked against the map's class count and
     /// turned into the class each votes for; a point with several voting classes takes the
     /// scalar path.
     pub(crate) fn set_labels(
@@ -200,7 +259,7 @@ impl Batch {
         classes: usize,
     ) {
         for j in 0..self.len.min(BATCH) {
-            let l = labels(j);
+            let l = labels(self.pixel[j]);
             let voting = voting_classes(&l, config);
             self.vote[j] = voting.first().copied().unwrap_or(0);
             if self.status[j] == FAST {
@@ -238,9 +297,13 @@ impl Batch {
 }
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
-    /// The accumulation stage for a converted batch with its labels set; `labels(j)` gives
-    /// the labels of point `j` for the scalar path. Every point ends in exactly one counter
-    /// of the frame's report.
+    /// The accumulation stage for a converted batch with its labels set; `labels(pixel)`
+    /// gives the labels of a point (see [`Batch::pixel`]) for the scalar path. Every point
+    /// ends in exactly one counter of the frame's report.
+    ///
+    /// Consecutive `FAST` points of one voxel (a run) are summed in registers and added to
+    /// the voxel's accumulator once; a new run costs a key comparison with its accumulator
+    /// and, rarely, a voxel lookup.
     #[inline]
     pub(crate) fn accumulate(
         &mut self,
@@ -248,7 +311,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         batch: &Batch,
         labels: impl Fn(usize) -> Labels,
     ) {
-        let mut used = 0;
+        let mut run = Run::NONE;
         for j in 0..batch.len.min(BATCH) {
             match batch.status[j] {
                 FAST => {}
@@ -261,31 +324,94 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                     continue;
                 }
                 _ => {
-                    self.add_point(f, batch.point(j), &labels(j));
+                    // The scalar path uses the accumulators: the run goes in first.
+                    self.end_run(f, &mut run);
+                    self.add_point(f, batch.point(j), &labels(batch.pixel[j]));
                     continue;
                 }
             }
             let key = batch.key(j);
-            let a = accumulator_index(key);
-            if f.acc[a].key != key {
-                let Some(vs) = self.point_voxel(f, &VoxelKey::unpack(key)) else {
-                    f.report.dropped_points += 1;
-                    continue;
-                };
-                self.open_accumulator(f, a, vs, key);
+            if key != run.key {
+                self.end_run(f, &mut run);
+                self.start_run(f, &mut run, key);
             }
-            let w = [batch.w[0][j], batch.w[1][j], batch.w[2][j]];
-            self.add_to_accumulator(f, a, &w);
+            if run.dropped {
+                f.report.dropped_points += 1;
+                continue;
+            }
+            run.n += 1;
+            for (sum, w) in run.w.iter_mut().zip(&batch.w) {
+                *sum += w[j];
+            }
             let class = batch.vote[j];
-            if class != 0 && takes_vote(batch.hash[j], f.acc[a].vote_exponent) {
-                if let Some(v) = self.voxels.slots.get_mut(f.acc[a].slot) {
+            if class != 0 && (batch.hash[j] as u64) < run.vote_limit {
+                if let Some(v) = self.voxels.slots.get_mut(run.slot) {
                     v.take_vote(&[class]);
                 }
             }
-            used += 1;
         }
-        f.report.points_used += used;
+        self.end_run(f, &mut run);
     }
+
+    /// Starts a run of points in voxel `key`: finds its accumulator, opening it (a voxel
+    /// lookup) unless it holds the voxel already.
+    #[inline]
+    fn start_run(&mut self, f: &mut FrameState, run: &mut Run, key: u64) {
+        let a = accumulator_index(key);
+        *run = Run {
+            key,
+            acc: a,
+            ..Run::NONE
+        };
+        if f.acc[a].key != key {
+            let Some(vs) = self.point_voxel(f, &VoxelKey::unpack(key)) else {
+                run.dropped = true;
+                return;
+            };
+            self.open_accumulator(f, a, vs, key);
+        }
+        run.slot = f.acc[a].slot;
+        // `takes_vote(hash, e)` is `hash < 2^(32 - e)`.
+        run.vote_limit = 1 << (32 - f.acc[a].vote_exponent.min(MAX_VOTE_EXPONENT) as u32);
+    }
+
+    /// Adds a run's points to its accumulator and ends it.
+    #[inline]
+    fn end_run(&mut self, f: &mut FrameState, run: &mut Run) {
+        if run.n > 0 {
+            self.add_to_accumulator(f, run.acc, &run.w, run.n);
+            f.report.points_used += run.n;
+        }
+        *run = Run::NONE;
+    }
+}
+
+/// The points of one voxel that phase 1 is summing in registers.
+struct Run {
+    /// The voxel's packed key (0, never a valid key, for no run).
+    key: u64,
+    /// Its accumulator and slot.
+    acc: usize,
+    slot: usize,
+    /// The run's points and the sum of their [`packed_offsets`].
+    n: u32,
+    w: [u64; 3],
+    /// Points vote if their hash is below this ([`takes_vote`]).
+    vote_limit: u64,
+    /// The map is full: the voxel could not be created.
+    dropped: bool,
+}
+
+impl Run {
+    const NONE: Run = Run {
+        key: 0,
+        acc: 0,
+        slot: usize::MAX,
+        n: 0,
+        w: [0; 3],
+        vote_limit: 0,
+        dropped: false,
+    };
 }
 
 /// `floor(t)` for `|t| < 2^22` (the key range in quanta is within `2^21`), equal to the

@@ -85,12 +85,13 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         self.walk(f, cache, &ray, (o, target), (start, e), include_end);
     }
 
-    /// The traversal of [`traverse`] (same voxels, same order), specialised for misses: the
-    /// block and the cell index are tracked as the walk steps (a ray stays about four steps
-    /// in a block), so a voxel that already has its miss costs one step and one bit test;
-    /// most visits are such voxels, as the rays of a frame share their start. The walk
-    /// state stays in scalars and steps without branching on the axis (an array indexed
-    /// by the axis would go through memory on every step).
+    /// The traversal of [`traverse`] (same voxels, same order), specialised for misses: an
+    /// outer loop per block and an inner loop per voxel that keeps the walk in registers
+    /// (the block's slot and `missed` mask, the cell index, the position in the block), so
+    /// a voxel that already has its miss costs one bit test and one step; most visits are
+    /// such voxels, as the rays of a frame share their start. The end voxel can only be
+    /// reached with the last of the `|end - start|_1` steps, so the loop counts steps
+    /// instead of comparing keys.
     fn walk(
         &mut self,
         f: &mut FrameState,
@@ -106,70 +107,70 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let [d0, d1, d2] = dda.t_delta;
         let [mut t0, mut t1, mut t2] = dda.t_max;
         let [mut k0, mut k1, mut k2] = start;
-        let steps: u32 = (0..3).map(|a| (end[a] - start[a]).unsigned_abs()).sum();
-        let strides = [s0, 4 * s1, 16 * s2];
-        // The current block's slot, cell and `missed` mask (only this walk changes it).
-        let (mut at, mut missed) = self.enter_block(f, start);
+        let mut remaining: u32 = (0..3).map(|a| (end[a] - start[a]).unsigned_abs()).sum();
         // Overshooting the end by a few voxels stays in range unless an end is near it.
         let near_limit = start
             .iter()
             .chain(&end)
             .any(|c| c.unsigned_abs() > KEY_LIMIT as u32 - 8);
-        for _ in 0..=steps {
-            let at_end = k0 == end[0] && k1 == end[1] && k2 == end[2];
-            if at_end && !include_end {
-                return;
-            }
-            match at {
-                Some((bs, cell)) => {
-                    if missed & (1u64 << cell) == 0 {
-                        self.miss(f, cache, ray, &[k0, k1, k2], bs, cell);
+        loop {
+            let (at, mut missed) = self.enter_block(f, [k0, k1, k2]);
+            let mut cell = (k0 & 3) | ((k1 & 3) << 2) | ((k2 & 3) << 4);
+            loop {
+                let last = remaining == 0;
+                if last && !include_end && [k0, k1, k2] == end {
+                    return;
+                }
+                match at {
+                    Some(bs) if missed & (1u64 << cell) == 0 => {
+                        self.miss(f, cache, ray, &[k0, k1, k2], bs, cell as u32);
                         missed = self.blocks.slots[bs].missed;
                     }
+                    Some(_) => {}
+                    None => f.report.dropped_misses = f.report.dropped_misses.saturating_add(1),
                 }
-                None => f.report.dropped_misses = f.report.dropped_misses.saturating_add(1),
-            }
-            if at_end {
-                return;
-            }
-            // The next boundary: the lowest axis on ties, as `Dda::next_axis`.
-            let y = t1 < t0;
-            let t01 = if y { t1 } else { t0 };
-            let z = t2 < t01;
-            let x = !y && !z;
-            let y = y && !z;
-            if (if z { t2 } else { t01 }) > 1.0 + 1e-4 {
-                return;
-            }
-            let before = [k0, k1, k2];
-            k0 += if x { s0 } else { 0 };
-            k1 += if y { s1 } else { 0 };
-            k2 += if z { s2 } else { 0 };
-            t0 = if x { t0 + d0 } else { t0 };
-            t1 = if y { t1 + d1 } else { t1 };
-            t2 = if z { t2 + d2 } else { t2 };
-            // An axis moves monotonically from the sensor's valid key towards the end's
-            // valid key: leaving the key range means overshooting, with nothing valid after.
-            if near_limit && (k0.max(k1).max(k2) > KEY_LIMIT || k0.min(k1).min(k2) < -KEY_LIMIT) {
-                return;
-            }
-            let crossed = ((before[0] ^ k0) | (before[1] ^ k1) | (before[2] ^ k2)) & !3 != 0;
-            match at {
-                Some((bs, cell)) if !crossed => {
-                    let axis = if z { 2 } else { y as usize };
-                    at = Some((bs, (cell as i32 + strides[axis]) as u32));
+                if last {
+                    return;
                 }
-                _ => (at, missed) = self.enter_block(f, [k0, k1, k2]),
+                remaining -= 1;
+                // The next boundary: the lowest axis on ties, as `Dda::next_axis`.
+                let y = t1 < t0;
+                let t01 = if y { t1 } else { t0 };
+                let z = t2 < t01;
+                if (if z { t2 } else { t01 }) > 1.0 + 1e-4 {
+                    return;
+                }
+                // Whether the step leaves the block: the cell coordinate on that axis wraps.
+                let crossed = if z {
+                    (t2, k2, cell) = (t2 + d2, k2 + s2, cell + 16 * s2);
+                    k2 & 3 == if s2 > 0 { 0 } else { 3 }
+                } else if y {
+                    (t1, k1, cell) = (t1 + d1, k1 + s1, cell + 4 * s1);
+                    k1 & 3 == if s1 > 0 { 0 } else { 3 }
+                } else {
+                    (t0, k0, cell) = (t0 + d0, k0 + s0, cell + s0);
+                    k0 & 3 == if s0 > 0 { 0 } else { 3 }
+                };
+                // An axis moves monotonically from the sensor's valid key towards the
+                // end's valid key: leaving the key range means overshooting, with nothing
+                // valid after.
+                if near_limit && (k0.max(k1).max(k2) > KEY_LIMIT || k0.min(k1).min(k2) < -KEY_LIMIT)
+                {
+                    return;
+                }
+                if crossed {
+                    break;
+                }
             }
         }
     }
 
-    /// The block slot and cell index of voxel `k` (`None` when the map has no room for
-    /// the block), and the block's `missed` mask.
-    fn enter_block(&mut self, f: &mut FrameState, k: [i32; 3]) -> (Option<(usize, u32)>, u64) {
+    /// The block slot of voxel `k` (`None` when the map has no room for the block), and
+    /// the block's `missed` mask.
+    fn enter_block(&mut self, f: &mut FrameState, k: [i32; 3]) -> (Option<usize>, u64) {
         let at = VoxelKey::from_ints(k[0], k[1], k[2])
-            .and_then(|key| Some((self.frame_block(f, key.block(), false)?, key.cell())));
-        (at, at.map_or(0, |(bs, _)| self.blocks.slots[bs].missed))
+            .and_then(|key| self.frame_block(f, key.block(), false));
+        (at, at.map_or(0, |bs| self.blocks.slots[bs].missed))
     }
 
     /// The miss of voxel `k` (in block slot `bs`, cell `cell`, without a miss yet this

@@ -16,7 +16,7 @@
 //! Phase 1 only adds to integer sums and sets per-frame masks, and phases 2 and 3 go in
 //! key order, so the result does not depend on point order.
 
-use crate::batch::{Batch, BATCH};
+use crate::batch::{Batch, BATCH, TILE_COLS};
 use crate::block::bits;
 use crate::camera::{DepthImage, LabelImage, PixelRays};
 use crate::config::to_fixed;
@@ -102,7 +102,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// let mut batches = 0;
     /// let on_phase = |p| batches += (p == Phase::Points) as u32;
     /// map.integrate_depth_observed(&Isometry3::identity(), &img, on_phase).unwrap();
-    /// assert_eq!(batches, 6); // one batch per image row here
+    /// assert_eq!(batches, 1); // one tile of 8x8 pixels holds the image
     /// ```
     pub fn integrate_depth_observed(
         &mut self,
@@ -120,60 +120,49 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let stride = image.stride as usize;
         let (w, h) = (image.camera.width as usize, image.camera.height as usize);
         let per_row = w.div_ceil(stride);
-        for row in (0..h).step_by(stride) {
+        let tile_rows = BATCH / TILE_COLS;
+        for strip in (0..h).step_by(stride * tile_rows) {
             let mut done = 0;
             while done < per_row {
-                let n = (per_row - done).min(BATCH);
-                let col0 = done * stride;
+                let n = (per_row - done).min(TILE_COLS);
                 on_phase(Phase::Points);
-                batch.load_pixels(image, &rays, (row, col0, n));
+                let rows = (strip..h).step_by(stride).take(tile_rows);
+                batch.load_tile(image, &rays, rows, (done * stride, n));
                 batch.convert(&f);
-                self.set_pixel_labels(&mut batch, image, row * w + col0);
+                self.set_pixel_labels(&mut batch, image);
                 on_phase(Phase::Accumulate);
-                self.accumulate_pixels(&mut f, &batch, image, row * w + col0);
+                self.accumulate_pixels(&mut f, &batch, image);
                 done += n;
             }
         }
         Ok(self.finish(&mut f, on_phase))
     }
 
-    /// The labels (and vote hashes) of a batch of pixels starting at pixel `first`.
-    fn set_pixel_labels(&self, batch: &mut Batch, image: &DepthImage<'_>, first: usize) {
-        let stride = image.stride as usize;
+    /// The labels (and vote hashes) of a batch of pixels.
+    fn set_pixel_labels(&self, batch: &mut Batch, image: &DepthImage<'_>) {
         match image.labels {
             LabelImage::None => batch.clear_labels(),
             LabelImage::Top1(l) => {
-                batch.set_top1_labels(l.get(first..).unwrap_or(&[]), stride, C);
+                batch.set_top1_labels(l, C);
                 batch.hash_points();
             }
             LabelImage::TopK(l) => {
-                let at = |j: usize| l.get(first + j * stride).copied().unwrap_or(Labels::NONE);
+                let at = |i: usize| l.get(i).copied().unwrap_or(Labels::NONE);
                 batch.set_labels(at, &self.config, C);
                 batch.hash_points();
             }
         }
     }
 
-    /// The accumulation stage for a batch of pixels starting at pixel `first`, with the
-    /// image's labels.
-    fn accumulate_pixels(
-        &mut self,
-        f: &mut FrameState,
-        batch: &Batch,
-        image: &DepthImage<'_>,
-        first: usize,
-    ) {
-        let stride = image.stride as usize;
-        let pixel = |j: usize| first + j * stride;
+    /// The accumulation stage for a batch of pixels, with the image's labels.
+    fn accumulate_pixels(&mut self, f: &mut FrameState, batch: &Batch, image: &DepthImage<'_>) {
         match image.labels {
             LabelImage::None => self.accumulate(f, batch, |_| Labels::NONE),
-            LabelImage::Top1(l) => self.accumulate(f, batch, |j| {
-                l.get(pixel(j)).map_or(Labels::NONE, |&c| Labels::top1(c))
+            LabelImage::Top1(l) => self.accumulate(f, batch, |i| {
+                l.get(i).map_or(Labels::NONE, |&c| Labels::top1(c))
             }),
             LabelImage::TopK(l) => {
-                self.accumulate(f, batch, |j| {
-                    l.get(pixel(j)).copied().unwrap_or(Labels::NONE)
-                });
+                self.accumulate(f, batch, |i| l.get(i).copied().unwrap_or(Labels::NONE));
             }
         }
     }
@@ -334,5 +323,104 @@ mod tests {
         let kept: u32 = maps[0].voxels().map(|v| v.gaussian.count).sum();
         assert!(maps[0].voxels().all(|v| v.gaussian.count <= 16));
         assert!(kept < used, "kept {kept} of {used}");
+    }
+}
+
+#[cfg(test)]
+mod tile_tests {
+    extern crate std;
+
+    use crate::camera::PixelRays;
+    use crate::testutil::*;
+    use crate::*;
+    use std::vec::Vec;
+
+    /// The points `integrate_depth` must see: every sampled pixel through `depth_point`
+    /// in row-major order (a NaN point, rejected by depth, where it gives none).
+    fn image_points(img: &DepthImage<'_>) -> Vec<LabeledPoint> {
+        let cam = img.camera;
+        let rays = PixelRays::new(&cam);
+        let s = img.stride as usize;
+        let mut pts = Vec::new();
+        for row in (0..cam.height as usize).step_by(s) {
+            for col in (0..cam.width as usize).step_by(s) {
+                let i = row * cam.width as usize + col;
+                let ray = [rays.x(col), rays.y(row), 1.0];
+                let p = depth_point(ray, img.depth[i], img.kind).unwrap_or([f32::NAN; 3]);
+                let labels = match img.labels {
+                    LabelImage::None => Labels::NONE,
+                    LabelImage::Top1(l) => Labels::top1(l[i]),
+                    LabelImage::TopK(l) => l[i],
+                };
+                pts.push(LabeledPoint::new(Point3::new(p[0], p[1], p[2]), labels));
+            }
+        }
+        pts
+    }
+
+    #[test]
+    fn tiles_see_every_pixel_once_as_the_point_path_does() {
+        // Image sizes that are not multiples of the 8x8 tile, strides, both depth kinds, all
+        // label kinds; invalid depths, labels above the class count, points beyond max range.
+        let mut rng = Lcg(5);
+        for (w, h, stride) in [(13u32, 11u32, 1u32), (16, 9, 2), (21, 17, 3), (8, 8, 1)] {
+            let n = (w * h) as usize;
+            let depth: Vec<f32> = (0..n)
+                .map(|i| match i % 29 {
+                    3 => f32::NAN,
+                    7 => -1.0,
+                    11 => 0.0,
+                    13 => f32::INFINITY,
+                    17 => 40.0, // beyond max range
+                    _ => 1.0 + 0.4 * rng.next() as f32,
+                })
+                .collect();
+            let top1: Vec<u8> = (0..n).map(|i| (i % 7) as u8).collect(); // 6 > 5 classes
+            let topk: Vec<Labels> = (0..n)
+                .map(|i| Labels::top_k(&[(1 + (i % 6) as u8, 200), (1 + (i % 3) as u8, 150)]))
+                .collect();
+            let cam = Pinhole {
+                fx: 9.0,
+                fy: 8.0,
+                cx: w as f32 / 2.0,
+                cy: h as f32 / 2.0,
+                width: w,
+                height: h,
+            };
+            let labels = [
+                LabelImage::None,
+                LabelImage::Top1(&top1),
+                LabelImage::TopK(&topk),
+            ];
+            for (kind, labels) in [DepthKind::Planar, DepthKind::Range]
+                .into_iter()
+                .flat_map(|k| labels.iter().map(move |l| (k, *l)))
+            {
+                let img = DepthImage {
+                    camera: cam,
+                    depth: &depth,
+                    kind,
+                    labels,
+                    stride,
+                };
+                let mut cfg = Config::DEFAULT;
+                cfg.top_k = 2;
+                cfg.max_range = 3.0;
+                let pose = at(0.3, -0.2, 0.1);
+                let mut tiles: std::boxed::Box<Map<2048, 512, 5>> =
+                    std::boxed::Box::new(Map::new(cfg));
+                let mut points: std::boxed::Box<Map<2048, 512, 5>> =
+                    std::boxed::Box::new(Map::new(cfg));
+                let a = tiles.integrate_depth(&pose, &img).unwrap();
+                let b = points.integrate(&pose, &image_points(&img)).unwrap();
+                assert_eq!(a, b, "{w}x{h} stride {stride} {kind:?}");
+                assert!(a.points_used > 0 && a.rejected_depth > 0 && a.truncated > 0);
+                assert_eq!(
+                    snapshot(&*tiles),
+                    snapshot(&*points),
+                    "{w}x{h} stride {stride}"
+                );
+            }
+        }
     }
 }
