@@ -1,4 +1,5 @@
-//! Phase 1 in batches of up to [`BATCH`] points, two stages per batch:
+//! Phase 1 in batches of up to [`BATCH`] points (for a depth image, one tile of
+//! [`TILE_COLS`] x `BATCH / TILE_COLS` pixels), two stages per batch:
 //!
 //! 1. **convert** ([`Phase::Points`](crate::Phase::Points)): pixels to sensor points, world
 //!    coordinates, voxel keys and quantised offsets, in structure-of-arrays loops without
@@ -249,9 +250,9 @@ impl Batch {
         }
     }
 
-    /// Labels from `labels(pixel)` for every point (see [`Batch::pixel`]), checked against the map's class count and
-    /// turned into the class each votes for; a point with several voting classes takes the
-    /// scalar path.
+    /// Labels from `labels(pixel)` for every point (see [`Batch::pixel`]), checked against
+    /// the map's class count and turned into the class each votes for; a point with several
+    /// voting classes takes the scalar path.
     pub(crate) fn set_labels(
         &mut self,
         labels: impl Fn(usize) -> Labels,
