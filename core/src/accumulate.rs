@@ -12,7 +12,7 @@ use crate::frame::{accumulator_index, Accumulator, FrameState};
 use crate::key::{axis_key, VoxelKey};
 use crate::labels::Labels;
 use crate::map::Map;
-use crate::votes::voting_classes;
+use crate::votes::{vote_max, voting_classes};
 use crate::voxel::{packed_offsets, PackedSums, Voxel};
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
@@ -134,7 +134,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             sums: PackedSums::EMPTY,
             slot: vs,
             key,
-            vote_exponent: self.voxels.slots.get(vs).map_or(0, Voxel::vote_exponent),
+            vote_max: vote_max(self.voxels.slots.get(vs).map_or(0, Voxel::vote_exponent)),
         };
     }
 

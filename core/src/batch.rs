@@ -12,15 +12,15 @@
 //!    range, outside the key range, non-finite) goes through the scalar `Map::add_point`,
 //!    which handles and counts every case.
 
-use crate::camera::{DepthImage, DepthKind, PixelRays};
+use crate::camera::{DepthImage, DepthKind, LabelImage, PixelRays};
 use crate::config::Config;
+#[cfg(doc)]
+use crate::frame::Accumulator;
 use crate::frame::{accumulator_index, FrameState};
 use crate::key::VoxelKey;
 use crate::labels::{LabeledPoint, Labels};
 use crate::map::Map;
-#[cfg(doc)]
-use crate::votes::takes_vote;
-use crate::votes::{vote_hash, voting_classes, MAX_VOTE_EXPONENT};
+use crate::votes::{vote_hash, voting_classes};
 use crate::voxel::packed_offsets;
 
 /// Points per batch: large enough that the per-batch work vanishes, small enough for a
@@ -48,22 +48,53 @@ pub(crate) struct Batch {
     len: usize,
     /// Sensor-frame points (x, y, z).
     p: [[f32; BATCH]; 3],
-    /// Packed voxel keys in two halves: biased x, and biased y and z (valid for `FAST`
-    /// points; see [`Batch::key`]).
+    /// Packed voxel keys ([`VoxelKey::packed`]; valid for `FAST` points), and their two
+    /// halves: biased x, and biased y and z.
+    key: [u64; BATCH],
     key_x: [u32; BATCH],
     key_yz: [u32; BATCH],
     /// Quantised offsets in the voxel (x, y, z; valid for `FAST` points), and their packed
     /// contribution to the voxel's sums (`packed_offsets`).
     q: [[i32; BATCH]; 3],
     w: [[u64; BATCH]; 3],
-    /// Where each point came from: its pixel index in the image, or its index in the
-    /// slice of points.
-    pub(crate) pixel: [usize; BATCH],
+    /// Where the points came from (see [`Source::index`]).
+    pub(crate) source: Source,
     /// The class a point votes for (0: none).
     vote: [u8; BATCH],
-    /// Vote-sampling hashes of the sensor points ([`crate::vote_hash`]), when computed.
-    hash: [u32; BATCH],
+    /// Whether a point votes, as a number to compare: half its vote-sampling hash
+    /// ([`crate::vote_hash`]) if it votes for a class, else `u32::MAX`. A point votes
+    /// in a voxel if `vote_key <= vote_max >> 1`, which is `hash <= vote_max`
+    /// ([`Accumulator::vote_max`] is `2^k - 1`) for the points with a class and never
+    /// true for the others.
+    vote_key: [u32; BATCH],
     status: [u8; BATCH],
+}
+
+/// Where the points of a batch come from: point `j` is item
+/// `first + (j / cols) * row_step + (j % cols) * col_step` of the image's pixels (a tile),
+/// or of the slice of points.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Source {
+    first: usize,
+    cols: usize,
+    row_step: usize,
+    col_step: usize,
+}
+
+impl Source {
+    /// Points in slice order.
+    const POINTS: Source = Source {
+        first: 0,
+        cols: BATCH,
+        row_step: 0,
+        col_step: 1,
+    };
+
+    /// The pixel (or point) index of point `j` (only needed off the fast path).
+    pub(crate) fn index(&self, j: usize) -> usize {
+        let (row, col) = (j / self.cols.max(1), j % self.cols.max(1));
+        self.first + row * self.row_step + col * self.col_step
+    }
 }
 
 impl Batch {
@@ -71,13 +102,14 @@ impl Batch {
         Batch {
             len: 0,
             p: [[0.0; BATCH]; 3],
+            key: [0; BATCH],
             key_x: [0; BATCH],
             key_yz: [0; BATCH],
             q: [[0; BATCH]; 3],
             w: [[0; BATCH]; 3],
-            pixel: [0; BATCH],
+            source: Source::POINTS,
             vote: [0; BATCH],
-            hash: [0; BATCH],
+            vote_key: [u32::MAX; BATCH],
             status: [FAST; BATCH],
         }
     }
@@ -85,34 +117,43 @@ impl Batch {
     /// Loads `points` (at most [`BATCH`]).
     pub(crate) fn load_points(&mut self, points: &[LabeledPoint]) {
         self.len = points.len().min(BATCH);
+        self.source = Source::POINTS;
         for (j, lp) in points.iter().take(BATCH).enumerate() {
             self.p[0][j] = lp.position.x;
             self.p[1][j] = lp.position.y;
             self.p[2][j] = lp.position.z;
             self.status[j] = FAST;
-            self.pixel[j] = j;
         }
     }
 
     /// Loads a tile of the image: `n <= TILE_COLS` pixels (at the image's stride) from
-    /// column `col0` on, in each of `rows` (as many as fit), as [`crate::depth_point`]
-    /// turns them into points.
+    /// column `col0` on, in each of the `rows` from `row0` on (as many as fit), as
+    /// [`crate::depth_point`] turns them into points, with their one-class labels (if
+    /// the image has those) and their status; `classes` is the map's class count.
     pub(crate) fn load_tile(
         &mut self,
         image: &DepthImage<'_>,
         rays: &PixelRays,
-        rows: impl Iterator<Item = usize>,
+        (row0, rows): (usize, usize),
         (col0, n): (usize, usize),
+        classes: usize,
     ) {
         let stride = image.stride as usize;
+        let width = image.camera.width as usize;
         let n = n.min(TILE_COLS);
         let mut xs = [0.0f32; TILE_COLS];
         for (j, x) in xs.iter_mut().enumerate().take(n) {
             *x = rays.x(col0 + j * stride);
         }
+        self.source = Source {
+            first: row0 * width + col0,
+            cols: n,
+            row_step: stride * width,
+            col_step: stride,
+        };
         self.len = 0;
-        for row in rows {
-            let first = row * image.camera.width as usize + col0;
+        for row in (row0..).step_by(stride).take(rows) {
+            let first = row * width + col0;
             let depth = image.depth.get(first..).unwrap_or(&[]);
             let start = self.len.min(BATCH);
             let y = rays.y(row);
@@ -121,10 +162,22 @@ impl Batch {
                 (1, _) => self.put_row(&xs[..n], y, depth.iter(), start),
                 _ => self.put_row(&xs[..n], y, depth.iter().step_by(stride), start),
             };
-            for (j, pixel) in self.pixel[start..end].iter_mut().enumerate() {
-                *pixel = first + j * stride;
-            }
             self.len = end;
+            let votes = &mut self.vote[start..end];
+            match image.labels {
+                LabelImage::Top1(l) => {
+                    let l = l.get(first..).unwrap_or(&[]);
+                    match (stride, l.get(..votes.len())) {
+                        (1, Some(l)) => votes.copy_from_slice(l),
+                        _ => {
+                            for (v, i) in votes.iter_mut().zip((0..).step_by(stride)) {
+                                *v = l.get(i).copied().unwrap_or(0);
+                            }
+                        }
+                    }
+                }
+                _ => votes.fill(0),
+            }
             if image.kind == DepthKind::Range {
                 for j in start..end {
                     // Undo the planar scaling: scale = d / |ray| instead of d.
@@ -136,12 +189,23 @@ impl Batch {
                 }
             }
         }
-        // z is the depth (or has its sign and finiteness); written so that NaN fails: the
-        // same test as `depth_point`.
+        self.set_status(classes);
+    }
+
+    /// The status of every loaded point before conversion: `NO_DEPTH`, `BAD_LABEL` (a
+    /// vote above the class count) or `FAST`. z is the depth (or has its sign and
+    /// finiteness); written so that NaN fails: the same test as `depth_point`.
+    fn set_status(&mut self, classes: usize) {
         let n = self.len.min(BATCH);
-        for (status, &z) in self.status[..n].iter_mut().zip(&self.p[2][..n]) {
-            *status = if z > 0.0 && z < f32::INFINITY {
+        let statuses = self.status[..n].iter_mut().zip(&self.vote[..n]);
+        for ((status, &vote), &z) in statuses.zip(&self.p[2][..n]) {
+            let bad_label = if vote as usize > classes {
+                BAD_LABEL
+            } else {
                 FAST
+            };
+            *status = if z > 0.0 && z < f32::INFINITY {
+                bad_label
             } else {
                 NO_DEPTH
             };
@@ -229,7 +293,10 @@ impl Batch {
             // NO_DEPTH stays, FAST becomes SLOW unless every check passed.
             self.status[j] = self.status[j].max(if fast { FAST } else { SLOW });
         }
+        // 64-bit lanes from here on (the loop above runs in 32-bit lanes, twice as many
+        // per vector instruction).
         for j in 0..n {
+            self.key[j] = ((self.key_x[j] as u64) << 32) | self.key_yz[j] as u64;
             let w = packed_offsets([self.q[0][j], self.q[1][j], self.q[2][j]]);
             for (axis, wi) in self.w.iter_mut().zip(w) {
                 axis[j] = wi;
@@ -237,20 +304,7 @@ impl Batch {
         }
     }
 
-    /// Labels of pixels with one class each, from the label image `labels`. A class id is
-    /// the class it votes for (0, void, votes for nothing).
-    pub(crate) fn set_top1_labels(&mut self, labels: &[u8], classes: usize) {
-        let n = self.len.min(BATCH);
-        for j in 0..n {
-            let c = labels.get(self.pixel[j]).copied().unwrap_or(0);
-            self.vote[j] = c;
-            if c as usize > classes && self.status[j] == FAST {
-                self.status[j] = BAD_LABEL;
-            }
-        }
-    }
-
-    /// Labels from `labels(pixel)` for every point (see [`Batch::pixel`]), checked against
+    /// Labels from `labels(pixel)` for every point (see [`Source::index`]), checked against
     /// the map's class count and turned into the class each votes for; a point with several
     /// voting classes takes the scalar path.
     pub(crate) fn set_labels(
@@ -260,7 +314,7 @@ impl Batch {
         classes: usize,
     ) {
         for j in 0..self.len.min(BATCH) {
-            let l = labels(self.pixel[j]);
+            let l = labels(self.source.index(j));
             let voting = voting_classes(&l, config);
             self.vote[j] = voting.first().copied().unwrap_or(0);
             if self.status[j] == FAST {
@@ -273,23 +327,22 @@ impl Batch {
         }
     }
 
-    /// No labels: no point votes.
-    pub(crate) fn clear_labels(&mut self) {
-        self.vote = [0; BATCH];
-    }
-
-    /// The vote-sampling hash of every loaded point (needed when the points have labels).
-    pub(crate) fn hash_points(&mut self) {
+    /// The vote keys of the loaded points ([`Batch::vote_key`]), from their votes:
+    /// `labelled` is false when no point can vote (the batch has no labels).
+    pub(crate) fn set_vote_keys(&mut self, labelled: bool) {
         let n = self.len.min(BATCH);
-        for j in 0..n {
-            self.hash[j] = vote_hash(&[self.p[0][j], self.p[1][j], self.p[2][j]]);
+        if !labelled {
+            self.vote_key[..n].fill(u32::MAX);
+            return;
         }
-    }
-
-    /// The packed voxel key of point `j` (a `FAST` one).
-    #[inline]
-    fn key(&self, j: usize) -> u64 {
-        ((self.key_x[j] as u64) << 32) | self.key_yz[j] as u64
+        for j in 0..n {
+            let hash = vote_hash(&[self.p[0][j], self.p[1][j], self.p[2][j]]);
+            self.vote_key[j] = if self.vote[j] != 0 {
+                hash >> 1
+            } else {
+                u32::MAX
+            };
+        }
     }
 
     fn point(&self, j: usize) -> [f32; 3] {
@@ -297,10 +350,13 @@ impl Batch {
     }
 }
 
+/// The accumulator index of a run whose voxel could not be created (the map is full).
+const DROPPED: usize = usize::MAX;
+
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
-    /// The accumulation stage for a converted batch with its labels set; `labels(pixel)`
-    /// gives the labels of a point (see [`Batch::pixel`]) for the scalar path. Every point
-    /// ends in exactly one counter of the frame's report.
+    /// The accumulation stage for a converted batch with its labels set; `labels(index)`
+    /// gives the labels of a point (see [`Source::index`]) for the scalar path. Every
+    /// point ends in exactly one counter of the frame's report.
     ///
     /// Consecutive `FAST` points of one voxel (a run) are summed in registers and added to
     /// the voxel's accumulator once; a new run costs a key comparison with its accumulator
@@ -327,61 +383,82 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 _ => {
                     // The scalar path uses the accumulators: the run goes in first.
                     self.end_run(f, &mut run);
-                    self.add_point(f, batch.point(j), &labels(batch.pixel[j]));
+                    let labels = labels(batch.source.index(j));
+                    self.add_point(f, batch.point(j), &labels);
                     continue;
                 }
             }
-            let key = batch.key(j);
+            let key = batch.key[j];
             if key != run.key {
                 self.end_run(f, &mut run);
                 self.start_run(f, &mut run, key);
             }
-            if run.dropped {
-                f.report.dropped_points += 1;
-                continue;
-            }
             run.n += 1;
-            for (sum, w) in run.w.iter_mut().zip(&batch.w) {
-                *sum += w[j];
-            }
+            run.w[0] += batch.w[0][j];
+            run.w[1] += batch.w[1][j];
+            run.w[2] += batch.w[2][j];
+            // The run's votes are counted per class and taken at once.
             let class = batch.vote[j];
-            if class != 0 && (batch.hash[j] as u64) < run.vote_limit {
-                if let Some(v) = self.voxels.slots.get_mut(run.slot) {
-                    v.take_vote(&[class]);
-                }
+            let votes = batch.vote_key[j] <= run.vote_key_max;
+            if votes & (class != run.class) {
+                self.take_run_votes(&mut run);
+                run.class = class;
             }
+            run.votes += votes as u32;
         }
         self.end_run(f, &mut run);
     }
 
-    /// Starts a run of points in voxel `key`: finds its accumulator, opening it (a voxel
-    /// lookup) unless it holds the voxel already.
-    #[inline]
+    /// Starts a run of points in voxel `key`: its accumulator, unless that holds another
+    /// voxel (then [`Map::open_run`]).
+    #[inline(always)]
     fn start_run(&mut self, f: &mut FrameState, run: &mut Run, key: u64) {
         let a = accumulator_index(key);
-        *run = Run {
-            key,
-            acc: a,
-            ..Run::NONE
+        run.key = key;
+        (run.acc, run.slot, run.vote_key_max) = match f.acc.get(a) {
+            Some(acc) if acc.key == key => (a, acc.slot, acc.vote_max >> 1),
+            _ => self.open_run(f, key, a),
         };
-        if f.acc[a].key != key {
-            let Some(vs) = self.point_voxel(f, &VoxelKey::unpack(key)) else {
-                run.dropped = true;
-                return;
-            };
-            self.open_accumulator(f, a, vs, key);
-        }
-        run.slot = f.acc[a].slot;
-        // `takes_vote(hash, e)` is `hash < 2^(32 - e)`.
-        run.vote_limit = 1 << (32 - f.acc[a].vote_exponent.min(MAX_VOTE_EXPONENT) as u32);
     }
 
-    /// Adds a run's points to its accumulator and ends it.
-    #[inline]
+    /// [`Map::start_run`] when accumulator `a` holds another voxel: finds or creates voxel
+    /// `key` and opens the accumulator for it; returns the run's accumulator, slot and
+    /// `vote_key_max`, or marks the run `DROPPED` (its points are counted as dropped and take
+    /// no votes) when the map is full. (The run stays in registers: it is not passed.)
+    #[inline(never)]
+    fn open_run(&mut self, f: &mut FrameState, key: u64, a: usize) -> (usize, usize, u32) {
+        match self.point_voxel(f, &VoxelKey::unpack(key)) {
+            Some(vs) => {
+                self.open_accumulator(f, a, vs, key);
+                (a, vs, f.acc.get(a).map_or(0, |acc| acc.vote_max >> 1))
+            }
+            None => (DROPPED, usize::MAX, 0),
+        }
+    }
+
+    /// Gives the run's voxel the votes the run counted so far.
+    #[inline(always)]
+    fn take_run_votes(&mut self, run: &mut Run) {
+        if run.votes > 0 {
+            if let Some(v) = self.voxels.slots.get_mut(run.slot) {
+                v.take_votes(run.class, run.votes);
+            }
+            run.votes = 0;
+        }
+    }
+
+    /// Adds a run's points to its accumulator (or counts them as dropped), gives its
+    /// voxel its votes and ends it.
+    #[inline(always)]
     fn end_run(&mut self, f: &mut FrameState, run: &mut Run) {
+        self.take_run_votes(run);
         if run.n > 0 {
-            self.add_to_accumulator(f, run.acc, &run.w, run.n);
-            f.report.points_used += run.n;
+            if run.acc == DROPPED {
+                f.report.dropped_points += run.n;
+            } else {
+                self.add_to_accumulator(f, run.acc, &run.w, run.n);
+                f.report.points_used += run.n;
+            }
         }
         *run = Run::NONE;
     }
@@ -391,30 +468,32 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
 struct Run {
     /// The voxel's packed key (0, never a valid key, for no run).
     key: u64,
-    /// Its accumulator and slot.
+    /// Its accumulator (`DROPPED` if the voxel could not be created) and slot.
     acc: usize,
     slot: usize,
     /// The run's points and the sum of their [`packed_offsets`].
     n: u32,
     w: [u64; 3],
-    /// Points vote if their hash is below this ([`takes_vote`]).
-    vote_limit: u64,
-    /// The map is full: the voxel could not be created.
-    dropped: bool,
+    /// Points vote if their [`Batch::vote_key`] is at most this: the voxel's
+    /// [`Accumulator::vote_max`] halved.
+    vote_key_max: u32,
+    /// The run's voting points so far, all for `class`.
+    votes: u32,
+    class: u8,
 }
 
 impl Run {
     const NONE: Run = Run {
         key: 0,
-        acc: 0,
+        acc: DROPPED,
         slot: usize::MAX,
         n: 0,
         w: [0; 3],
-        vote_limit: 0,
-        dropped: false,
+        vote_key_max: 0,
+        votes: 0,
+        class: 0,
     };
 }
-
 /// `floor(t)` for `|t| < 2^22` (the key range in quanta is within `2^21`), equal to the
 /// scalar path's `floor_i32` there, in operations that vectorise: adding `1.5 * 2^23`
 /// rounds `t` to the nearest integer, which the float's low mantissa bits then hold; one

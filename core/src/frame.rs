@@ -12,6 +12,8 @@ use crate::error::Error;
 use crate::key::{axis_key, floor_i32, VoxelKey, KEY_LIMIT};
 use crate::map::Map;
 use crate::table::{Entry, NIL};
+#[cfg(doc)]
+use crate::votes::vote_max;
 use crate::voxel::PackedSums;
 use nalgebra::{Isometry3, Matrix3};
 
@@ -103,8 +105,9 @@ pub(crate) struct Accumulator {
     pub(crate) slot: usize,
     /// The voxel's packed key (0, never a valid key, when unused).
     pub(crate) key: u64,
-    /// The voxel's vote-sampling exponent (fixed during a frame).
-    pub(crate) vote_exponent: u8,
+    /// Its points vote if their hash is at most this: [`vote_max`] of the voxel's
+    /// vote-sampling exponent (fixed during a frame).
+    pub(crate) vote_max: u32,
 }
 
 impl Accumulator {
@@ -113,7 +116,7 @@ impl Accumulator {
         sums: PackedSums::EMPTY,
         slot: usize::MAX,
         key: 0,
-        vote_exponent: 0,
+        vote_max: 0,
     };
 }
 

@@ -83,7 +83,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             batch.load_points(chunk);
             batch.convert(&f);
             batch.set_labels(|j| chunk[j].labels, &self.config, C);
-            batch.hash_points();
+            batch.set_vote_keys(true);
             on_phase(Phase::Accumulate);
             self.accumulate(&mut f, &batch, |j| chunk[j].labels);
         }
@@ -126,8 +126,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             while done < per_row {
                 let n = (per_row - done).min(TILE_COLS);
                 on_phase(Phase::Points);
-                let rows = (strip..h).step_by(stride).take(tile_rows);
-                batch.load_tile(image, &rays, rows, (done * stride, n));
+                let rows = (h - strip).div_ceil(stride).min(tile_rows);
+                batch.load_tile(image, &rays, (strip, rows), (done * stride, n), C);
                 batch.convert(&f);
                 self.set_pixel_labels(&mut batch, image);
                 on_phase(Phase::Accumulate);
@@ -138,18 +138,16 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         Ok(self.finish(&mut f, on_phase))
     }
 
-    /// The labels (and vote hashes) of a batch of pixels.
+    /// The labels (and vote hashes) of a batch of pixels (one-class labels came with
+    /// the tile).
     fn set_pixel_labels(&self, batch: &mut Batch, image: &DepthImage<'_>) {
         match image.labels {
-            LabelImage::None => batch.clear_labels(),
-            LabelImage::Top1(l) => {
-                batch.set_top1_labels(l, C);
-                batch.hash_points();
-            }
+            LabelImage::None => batch.set_vote_keys(false),
+            LabelImage::Top1(_) => batch.set_vote_keys(true),
             LabelImage::TopK(l) => {
                 let at = |i: usize| l.get(i).copied().unwrap_or(Labels::NONE);
                 batch.set_labels(at, &self.config, C);
-                batch.hash_points();
+                batch.set_vote_keys(true);
             }
         }
     }

@@ -50,6 +50,13 @@ pub fn takes_vote(hash: u32, exponent: u8) -> bool {
     (hash as u64) >> (32 - exponent.min(MAX_VOTE_EXPONENT) as u32) == 0
 }
 
+/// The largest hash [`takes_vote`] takes at `exponent`: `takes_vote(h, e)` is
+/// `h <= vote_max(e)`.
+#[inline]
+pub(crate) fn vote_max(exponent: u8) -> u32 {
+    u32::MAX >> exponent.min(MAX_VOTE_EXPONENT)
+}
+
 /// Largest vote sampling exponent (one point in 32768).
 pub const MAX_VOTE_EXPONENT: u8 = 15;
 
@@ -137,6 +144,18 @@ impl<const C: usize> Voxel<C> {
         self.start_vote_sample(next);
     }
 
+    /// `count` votes for `class` (1..=C), each as [`Voxel::take_vote`] takes one: both
+    /// the bin and the votes taken saturate, so the order of votes does not matter.
+    #[inline]
+    pub(crate) fn take_votes(&mut self, class: u8, count: u32) {
+        let count = count.min(u16::MAX as u32) as u16;
+        let taken = (self.tally & VOTES_TAKEN_MAX).saturating_add(count);
+        self.tally = (self.tally & !VOTES_TAKEN_MAX) | taken.min(VOTES_TAKEN_MAX);
+        if let Some(bin) = self.hist.get_mut((class as usize).wrapping_sub(1)) {
+            *bin = (*bin as u32 + count as u32).min(u8::MAX as u32) as u8;
+        }
+    }
+
     /// Halves every bin if any bin exceeds `255 - votes` so a frame's sample of about
     /// `votes` votes has room (done once per voxel per frame, before the votes, so the
     /// result does not depend on point order).
@@ -155,6 +174,47 @@ mod tests {
     use super::*;
     use crate::testutil::*;
     use crate::*;
+
+    #[test]
+    fn take_votes_is_take_vote_repeated() {
+        // Counts around both saturation points (a bin at 255, the tally at 0xfff), classes
+        // in and out of range.
+        for (class, count, bin, taken) in [
+            (1u8, 0u32, 0u8, 0u16),
+            (2, 1, 7, 3),
+            (4, 30, 250, 100),
+            (3, 300, 0, 0xff0),
+            (1, 70_000, 12, 5),
+            (0, 5, 0, 0),
+            (5, 5, 0, 0),
+        ] {
+            let mut one_by_one = Voxel::<4>::new(&key(0, 0, 0));
+            one_by_one.hist = [bin, 9, bin, 1];
+            one_by_one.tally = (3 << EXPONENT_SHIFT) | taken;
+            let mut batched = one_by_one;
+            for _ in 0..count {
+                one_by_one.take_vote(&[class]);
+            }
+            batched.take_votes(class, count);
+            assert_eq!(batched.hist, one_by_one.hist, "class {class} x {count}");
+            assert_eq!(batched.tally, one_by_one.tally, "class {class} x {count}");
+        }
+    }
+
+    #[test]
+    fn vote_max_is_the_largest_hash_takes_vote_takes() {
+        // Hand-computed: one in 2^e of the hash range, e capped at 15.
+        assert_eq!(vote_max(0), u32::MAX);
+        assert_eq!(vote_max(1), 0x7fff_ffff);
+        assert_eq!(vote_max(15), 0x1_ffff);
+        assert_eq!(vote_max(200), 0x1_ffff);
+        for e in 0..=20u8 {
+            let m = vote_max(e);
+            for h in [0, 1, m.saturating_sub(1), m, m.wrapping_add(1), u32::MAX] {
+                assert_eq!(h <= m, takes_vote(h, e), "hash {h:#x}, exponent {e}");
+            }
+        }
+    }
 
     #[test]
     fn make_vote_room_halves_only_above_255_minus_votes() {
