@@ -6,20 +6,17 @@
 //!    branches, which the compiler vectorises. They perform the same IEEE operations in
 //!    the same order as the scalar path ([`crate::depth_point`], `FrameState::to_world`,
 //!    `FrameState::quantise`), so the map is bit-identical;
-//! 2. **accumulate** ([`Phase::Accumulate`](crate::Phase::Accumulate)): one voxel lookup per
-//!    run of consecutive points in the same voxel (a key comparison for the others),
-//!    integer sums in registers, votes. A point that is not the common case (beyond max
-//!    range, outside the key range, non-finite) goes through the scalar `Map::add_point`,
-//!    which handles and counts every case.
+//! 2. **accumulate** ([`Phase::Accumulate`](crate::Phase::Accumulate), `sums.rs`): integer
+//!    sums per voxel and votes, one voxel lookup per voxel of the batch.
 
 use crate::camera::{DepthImage, DepthKind, LabelImage, PixelRays};
 use crate::config::Config;
 #[cfg(doc)]
 use crate::frame::Accumulator;
-use crate::frame::{accumulator_index, FrameState};
+use crate::frame::FrameState;
+#[cfg(doc)]
 use crate::key::VoxelKey;
 use crate::labels::{LabeledPoint, Labels};
-use crate::map::Map;
 use crate::votes::{vote_hash, voting_classes};
 use crate::voxel::packed_offsets;
 
@@ -35,39 +32,41 @@ pub(crate) const TILE_COLS: usize = 8;
 
 /// The common case: finite, inside max range and the key range, labels that fit the map
 /// with at most one voting class.
-const FAST: u8 = 0;
+pub(crate) const FAST: u8 = 0;
 /// Otherwise fast, but a label above the class count (counted as `rejected_label`).
-const BAD_LABEL: u8 = 1;
+pub(crate) const BAD_LABEL: u8 = 1;
 /// Anything else: handled point by point by `Map::add_point`.
-const SLOW: u8 = 2;
+pub(crate) const SLOW: u8 = 2;
 /// A pixel without a depth measurement (counted as `rejected_depth`).
-const NO_DEPTH: u8 = 3;
+pub(crate) const NO_DEPTH: u8 = 3;
 
 /// One batch of points in structure-of-arrays form.
 pub(crate) struct Batch {
-    len: usize,
+    pub(crate) len: usize,
     /// Sensor-frame points (x, y, z).
     p: [[f32; BATCH]; 3],
     /// Packed voxel keys ([`VoxelKey::packed`]; valid for `FAST` points), and their two
     /// halves: biased x, and biased y and z.
-    key: [u64; BATCH],
+    pub(crate) key: [u64; BATCH],
     key_x: [u32; BATCH],
     key_yz: [u32; BATCH],
     /// Quantised offsets in the voxel (x, y, z; valid for `FAST` points), and their packed
     /// contribution to the voxel's sums (`packed_offsets`).
     q: [[i32; BATCH]; 3],
-    w: [[u64; BATCH]; 3],
-    /// Where the points came from (see [`Source::index`]).
+    pub(crate) w: [[u64; BATCH]; 3],
+    /// Where the points came from (see [`Source::index`]), and whether they are pixels
+    /// (whose depth is checked).
     pub(crate) source: Source,
+    from_depth: bool,
     /// The class a point votes for (0: none).
-    vote: [u8; BATCH],
+    pub(crate) vote: [u8; BATCH],
     /// Whether a point votes, as a number to compare: half its vote-sampling hash
     /// ([`crate::vote_hash`]) if it votes for a class, else `u32::MAX`. A point votes
     /// in a voxel if `vote_key <= vote_max >> 1`, which is `hash <= vote_max`
     /// ([`Accumulator::vote_max`] is `2^k - 1`) for the points with a class and never
     /// true for the others.
-    vote_key: [u32; BATCH],
-    status: [u8; BATCH],
+    pub(crate) vote_key: [u32; BATCH],
+    pub(crate) status: [u8; BATCH],
 }
 
 /// Where the points of a batch come from: point `j` is item
@@ -108,6 +107,7 @@ impl Batch {
             q: [[0; BATCH]; 3],
             w: [[0; BATCH]; 3],
             source: Source::POINTS,
+            from_depth: false,
             vote: [0; BATCH],
             vote_key: [u32::MAX; BATCH],
             status: [FAST; BATCH],
@@ -118,25 +118,25 @@ impl Batch {
     pub(crate) fn load_points(&mut self, points: &[LabeledPoint]) {
         self.len = points.len().min(BATCH);
         self.source = Source::POINTS;
+        self.from_depth = false;
         for (j, lp) in points.iter().take(BATCH).enumerate() {
             self.p[0][j] = lp.position.x;
             self.p[1][j] = lp.position.y;
             self.p[2][j] = lp.position.z;
-            self.status[j] = FAST;
+            self.vote[j] = 0;
         }
     }
 
     /// Loads a tile of the image: `n <= TILE_COLS` pixels (at the image's stride) from
     /// column `col0` on, in each of the `rows` from `row0` on (as many as fit), as
     /// [`crate::depth_point`] turns them into points, with their one-class labels (if
-    /// the image has those) and their status; `classes` is the map's class count.
+    /// the image has those).
     pub(crate) fn load_tile(
         &mut self,
         image: &DepthImage<'_>,
         rays: &PixelRays,
         (row0, rows): (usize, usize),
         (col0, n): (usize, usize),
-        classes: usize,
     ) {
         let stride = image.stride as usize;
         let width = image.camera.width as usize;
@@ -152,7 +152,8 @@ impl Batch {
             col_step: stride,
         };
         self.len = 0;
-        for row in (row0..).step_by(stride).take(rows) {
+        for r in 0..rows.min(BATCH / n.max(1)) {
+            let row = row0 + r * stride;
             let first = row * width + col0;
             let depth = image.depth.get(first..).unwrap_or(&[]);
             let start = self.len.min(BATCH);
@@ -168,6 +169,15 @@ impl Batch {
                 LabelImage::Top1(l) => {
                     let l = l.get(first..).unwrap_or(&[]);
                     match (stride, l.get(..votes.len())) {
+                        // A fixed-size copy: a single move, where a slice copy calls memcpy.
+                        (1, Some(l)) if l.len() == TILE_COLS => {
+                            if let (Ok(v), Ok(l)) = (
+                                <&mut [u8; TILE_COLS]>::try_from(&mut *votes),
+                                <&[u8; TILE_COLS]>::try_from(l),
+                            ) {
+                                *v = *l;
+                            }
+                        }
                         (1, Some(l)) => votes.copy_from_slice(l),
                         _ => {
                             for (v, i) in votes.iter_mut().zip((0..).step_by(stride)) {
@@ -189,27 +199,7 @@ impl Batch {
                 }
             }
         }
-        self.set_status(classes);
-    }
-
-    /// The status of every loaded point before conversion: `NO_DEPTH`, `BAD_LABEL` (a
-    /// vote above the class count) or `FAST`. z is the depth (or has its sign and
-    /// finiteness); written so that NaN fails: the same test as `depth_point`.
-    fn set_status(&mut self, classes: usize) {
-        let n = self.len.min(BATCH);
-        let statuses = self.status[..n].iter_mut().zip(&self.vote[..n]);
-        for ((status, &vote), &z) in statuses.zip(&self.p[2][..n]) {
-            let bad_label = if vote as usize > classes {
-                BAD_LABEL
-            } else {
-                FAST
-            };
-            *status = if z > 0.0 && z < f32::INFINITY {
-                bad_label
-            } else {
-                NO_DEPTH
-            };
-        }
+        self.from_depth = true;
     }
 
     /// [`Batch::put_row`] for a whole row of a tile, in fixed-size arrays that compile
@@ -266,39 +256,72 @@ impl Batch {
         written
     }
 
-    /// World coordinates, voxel keys, offsets and the status of every loaded point.
-    pub(crate) fn convert(&mut self, f: &FrameState) {
-        let r = &f.rot;
-        let max2 = f.max_range * f.max_range;
-        let n = self.len.min(BATCH);
-        for j in 0..n {
-            let (x, y, z) = (self.p[0][j], self.p[1][j], self.p[2][j]);
+    /// World coordinates, voxel keys, offsets and the status of every loaded point, for
+    /// a map with `classes` classes (a vote above is a bad label; votes set later are
+    /// checked when they are set).
+    pub(crate) fn convert(&mut self, f: &FrameState, classes: usize) {
+        // What the loops read, in locals, and the batch split into its arrays: stores
+        // into the batch then cannot change what the loops read, and the compiler
+        // vectorises without run-time overlap checks. The loops run over every lane (a
+        // fixed trip count); lanes past `len` hold stale values that nobody reads.
+        let r: [[f32; 3]; 3] = core::array::from_fn(|i| core::array::from_fn(|c| f.rot[(i, c)]));
+        let (origin, inv_quantum) = (f.origin, f.inv_quantum);
+        let (t_min, t_max, max2) = (f.t_min, f.t_max, f.max_range * f.max_range);
+        let (quant_bits, quant_mask, qhalf) = (f.quant_bits, f.quant_mask, f.qhalf);
+        let classes = classes.min(u8::MAX as usize) as u8;
+        let from_depth = self.from_depth;
+        let Batch {
+            p,
+            key,
+            key_x,
+            key_yz,
+            q: offsets,
+            w: sums,
+            vote,
+            status,
+            ..
+        } = self;
+        for j in 0..BATCH {
+            let (x, y, z) = (p[0][j], p[1][j], p[2][j]);
+            // A pixel's z is its depth (or has its sign and finiteness); written so that
+            // NaN fails: the same test as `depth_point`.
+            let no_depth = from_depth && !(z > 0.0 && z < f32::INFINITY);
+            let bad_label = vote[j] > classes;
             let r2 = x * x + y * y + z * z;
             let mut fast = r2 > 0.0 && r2 <= max2;
             let mut k = [0u32; 3];
             let mut q = [0i32; 3];
             for i in 0..3 {
-                let w = r[(i, 0)] * x + r[(i, 1)] * y + r[(i, 2)] * z + f.origin[i];
-                let t = w * f.inv_quantum;
-                fast &= t >= f.t_min && t < f.t_max;
+                let w = r[i][0] * x + r[i][1] * y + r[i][2] * z + origin[i];
+                let t = w * inv_quantum;
+                fast &= t >= t_min && t < t_max;
                 let m = floor_small(t);
-                k[i] = ((m >> f.quant_bits) + 32768) as u32 & 0xffff;
-                q[i] = (m & f.quant_mask) - f.qhalf + ((t - m as f32) >= 0.5) as i32;
+                k[i] = ((m >> quant_bits) + 32768) as u32 & 0xffff;
+                q[i] = (m & quant_mask) - qhalf + ((t - m as f32) >= 0.5) as i32;
             }
-            for (axis, qi) in self.q.iter_mut().zip(q) {
+            for (axis, qi) in offsets.iter_mut().zip(q) {
                 axis[j] = qi;
             }
-            self.key_x[j] = k[0];
-            self.key_yz[j] = (k[1] << 16) | k[2];
-            // NO_DEPTH stays, FAST becomes SLOW unless every check passed.
-            self.status[j] = self.status[j].max(if fast { FAST } else { SLOW });
+            key_x[j] = k[0];
+            key_yz[j] = (k[1] << 16) | k[2];
+            // The first that applies of NO_DEPTH, SLOW (unless every check passed),
+            // BAD_LABEL and FAST (the scalar path counts a bad label after the depth).
+            status[j] = if no_depth {
+                NO_DEPTH
+            } else if !fast {
+                SLOW
+            } else if bad_label {
+                BAD_LABEL
+            } else {
+                FAST
+            };
         }
         // 64-bit lanes from here on (the loop above runs in 32-bit lanes, twice as many
         // per vector instruction).
-        for j in 0..n {
-            self.key[j] = ((self.key_x[j] as u64) << 32) | self.key_yz[j] as u64;
-            let w = packed_offsets([self.q[0][j], self.q[1][j], self.q[2][j]]);
-            for (axis, wi) in self.w.iter_mut().zip(w) {
+        for j in 0..BATCH {
+            key[j] = ((key_x[j] as u64) << 32) | key_yz[j] as u64;
+            let w = packed_offsets([offsets[0][j], offsets[1][j], offsets[2][j]]);
+            for (axis, wi) in sums.iter_mut().zip(w) {
                 axis[j] = wi;
             }
         }
@@ -345,155 +368,12 @@ impl Batch {
         }
     }
 
-    fn point(&self, j: usize) -> [f32; 3] {
+    /// The sensor point of point `j`.
+    pub(crate) fn point(&self, j: usize) -> [f32; 3] {
         [self.p[0][j], self.p[1][j], self.p[2][j]]
     }
 }
 
-/// The accumulator index of a run whose voxel could not be created (the map is full).
-const DROPPED: usize = usize::MAX;
-
-impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
-    /// The accumulation stage for a converted batch with its labels set; `labels(index)`
-    /// gives the labels of a point (see [`Source::index`]) for the scalar path. Every
-    /// point ends in exactly one counter of the frame's report.
-    ///
-    /// Consecutive `FAST` points of one voxel (a run) are summed in registers and added to
-    /// the voxel's accumulator once; a new run costs a key comparison with its accumulator
-    /// and, rarely, a voxel lookup.
-    #[inline]
-    pub(crate) fn accumulate(
-        &mut self,
-        f: &mut FrameState,
-        batch: &Batch,
-        labels: impl Fn(usize) -> Labels,
-    ) {
-        let mut run = Run::NONE;
-        for j in 0..batch.len.min(BATCH) {
-            match batch.status[j] {
-                FAST => {}
-                NO_DEPTH => {
-                    f.report.rejected_depth += 1;
-                    continue;
-                }
-                BAD_LABEL => {
-                    f.report.rejected_label += 1;
-                    continue;
-                }
-                _ => {
-                    // The scalar path uses the accumulators: the run goes in first.
-                    self.end_run(f, &mut run);
-                    let labels = labels(batch.source.index(j));
-                    self.add_point(f, batch.point(j), &labels);
-                    continue;
-                }
-            }
-            let key = batch.key[j];
-            if key != run.key {
-                self.end_run(f, &mut run);
-                self.start_run(f, &mut run, key);
-            }
-            run.n += 1;
-            run.w[0] += batch.w[0][j];
-            run.w[1] += batch.w[1][j];
-            run.w[2] += batch.w[2][j];
-            // The run's votes are counted per class and taken at once.
-            let class = batch.vote[j];
-            let votes = batch.vote_key[j] <= run.vote_key_max;
-            if votes & (class != run.class) {
-                self.take_run_votes(&mut run);
-                run.class = class;
-            }
-            run.votes += votes as u32;
-        }
-        self.end_run(f, &mut run);
-    }
-
-    /// Starts a run of points in voxel `key`: its accumulator, unless that holds another
-    /// voxel (then [`Map::open_run`]).
-    #[inline(always)]
-    fn start_run(&mut self, f: &mut FrameState, run: &mut Run, key: u64) {
-        let a = accumulator_index(key);
-        run.key = key;
-        (run.acc, run.slot, run.vote_key_max) = match f.acc.get(a) {
-            Some(acc) if acc.key == key => (a, acc.slot, acc.vote_max >> 1),
-            _ => self.open_run(f, key, a),
-        };
-    }
-
-    /// [`Map::start_run`] when accumulator `a` holds another voxel: finds or creates voxel
-    /// `key` and opens the accumulator for it; returns the run's accumulator, slot and
-    /// `vote_key_max`, or marks the run `DROPPED` (its points are counted as dropped and take
-    /// no votes) when the map is full. (The run stays in registers: it is not passed.)
-    #[inline(never)]
-    fn open_run(&mut self, f: &mut FrameState, key: u64, a: usize) -> (usize, usize, u32) {
-        match self.point_voxel(f, &VoxelKey::unpack(key)) {
-            Some(vs) => {
-                self.open_accumulator(f, a, vs, key);
-                (a, vs, f.acc.get(a).map_or(0, |acc| acc.vote_max >> 1))
-            }
-            None => (DROPPED, usize::MAX, 0),
-        }
-    }
-
-    /// Gives the run's voxel the votes the run counted so far.
-    #[inline(always)]
-    fn take_run_votes(&mut self, run: &mut Run) {
-        if run.votes > 0 {
-            if let Some(v) = self.voxels.slots.get_mut(run.slot) {
-                v.take_votes(run.class, run.votes);
-            }
-            run.votes = 0;
-        }
-    }
-
-    /// Adds a run's points to its accumulator (or counts them as dropped), gives its
-    /// voxel its votes and ends it.
-    #[inline(always)]
-    fn end_run(&mut self, f: &mut FrameState, run: &mut Run) {
-        self.take_run_votes(run);
-        if run.n > 0 {
-            if run.acc == DROPPED {
-                f.report.dropped_points += run.n;
-            } else {
-                self.add_to_accumulator(f, run.acc, &run.w, run.n);
-                f.report.points_used += run.n;
-            }
-        }
-        *run = Run::NONE;
-    }
-}
-
-/// The points of one voxel that phase 1 is summing in registers.
-struct Run {
-    /// The voxel's packed key (0, never a valid key, for no run).
-    key: u64,
-    /// Its accumulator (`DROPPED` if the voxel could not be created) and slot.
-    acc: usize,
-    slot: usize,
-    /// The run's points and the sum of their [`packed_offsets`].
-    n: u32,
-    w: [u64; 3],
-    /// Points vote if their [`Batch::vote_key`] is at most this: the voxel's
-    /// [`Accumulator::vote_max`] halved.
-    vote_key_max: u32,
-    /// The run's voting points so far, all for `class`.
-    votes: u32,
-    class: u8,
-}
-
-impl Run {
-    const NONE: Run = Run {
-        key: 0,
-        acc: DROPPED,
-        slot: usize::MAX,
-        n: 0,
-        w: [0; 3],
-        vote_key_max: 0,
-        votes: 0,
-        class: 0,
-    };
-}
 /// `floor(t)` for `|t| < 2^22` (the key range in quanta is within `2^21`), equal to the
 /// scalar path's `floor_i32` there, in operations that vectorise: adding `1.5 * 2^23`
 /// rounds `t` to the nearest integer, which the float's low mantissa bits then hold; one
@@ -503,7 +383,7 @@ impl Run {
 fn floor_small(t: f32) -> i32 {
     const MAGIC: f32 = 12_582_912.0; // 1.5 * 2^23
     let rounded = ((t + MAGIC).to_bits() as i32).wrapping_sub(MAGIC.to_bits() as i32);
-    rounded - ((rounded as f32 > t) as i32)
+    rounded.wrapping_sub((rounded as f32 > t) as i32)
 }
 
 #[cfg(test)]

@@ -81,7 +81,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         for chunk in points.chunks(BATCH) {
             on_phase(Phase::Points);
             batch.load_points(chunk);
-            batch.convert(&f);
+            batch.convert(&f, C);
             batch.set_labels(|j| chunk[j].labels, &self.config, C);
             batch.set_vote_keys(true);
             on_phase(Phase::Accumulate);
@@ -127,8 +127,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 let n = (per_row - done).min(TILE_COLS);
                 on_phase(Phase::Points);
                 let rows = (h - strip).div_ceil(stride).min(tile_rows);
-                batch.load_tile(image, &rays, (strip, rows), (done * stride, n), C);
-                batch.convert(&f);
+                batch.load_tile(image, &rays, (strip, rows), (done * stride, n));
+                batch.convert(&f, C);
                 self.set_pixel_labels(&mut batch, image);
                 on_phase(Phase::Accumulate);
                 self.accumulate_pixels(&mut f, &batch, image);

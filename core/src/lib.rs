@@ -40,7 +40,7 @@
 //! | `map`, `votes` | the [`Map`] struct and its queries; vote sampling of the histogram |
 //! | `evict`, `raycast`, `snapshot` | eviction of far entries; [`Map::raycast`]; snapshots |
 //! | `frame` | the state of one frame being integrated, [`FrameReport`] |
-//! | `accumulate`, `batch`, `free_space` | integration phase 1 (points into sums and votes; the scalar path, and batches of 64 points in two vectorisable stages) and phase 3 (rays) |
+//! | `accumulate`, `batch`, `sums`, `free_space` | integration phase 1 (points into sums and votes; the scalar path, and batches of 64 points in two vectorisable stages) and phase 3 (rays) |
 //! | `integrate`, `render` | [`Map::integrate`] and [`Map::integrate_depth`] as their steps; [`Map::render`] |
 //!
 //! Integer formats, the snapshot layout and eviction are described in more depth in
@@ -105,6 +105,7 @@ mod frame;
 mod accumulate;
 mod batch;
 mod free_space;
+mod sums;
 
 mod integrate;
 mod render;
