@@ -166,7 +166,11 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     /// Phases 2 and 3 after the frame's last point, then the frame's totals.
-    fn finish(&mut self, f: &mut FrameState, mut on_phase: impl FnMut(Phase)) -> FrameReport {
+    pub(crate) fn finish(
+        &mut self,
+        f: &mut FrameState,
+        mut on_phase: impl FnMut(Phase),
+    ) -> FrameReport {
         on_phase(Phase::EndVoxels);
         self.flush_accumulators(f);
         let head = self.sort_frame_list(f.head);

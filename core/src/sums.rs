@@ -32,10 +32,10 @@ const DROPPED: usize = usize::MAX;
 /// A pending point for the scalar path (never a packed key, which has 48 bits).
 const OTHER: u64 = u64::MAX;
 
-/// The first point from `j` on with something left to do.
+/// The first point from `j` on with something left to do (`BATCH - 1` if none).
 fn next_pending(pending: &[u64; BATCH], j: usize) -> usize {
     let rest = pending.get(j..).unwrap_or(&[]);
-    j + rest.iter().position(|&p| p != 0).unwrap_or(rest.len())
+    (j + rest.iter().position(|&p| p != 0).unwrap_or(rest.len())).min(BATCH - 1)
 }
 
 /// Whether this target sums by voxel (see the module documentation).
@@ -209,20 +209,29 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         }
         f.report.rejected_depth += no_depth;
         f.report.rejected_label += bad_label;
-        let mut j = next_pending(&pending, 0);
-        while j < n {
-            if pending[j] == OTHER {
-                pending[j] = 0;
-                self.other_point(f, batch, j, &labels);
-                j = next_pending(&pending, j + 1);
-            } else {
-                j = self.add_voxel(f, batch, (&mut pending, &votes), j);
+        // Points are done in order of their first pending point; the search for the
+        // next one only moves forward and stops when every point is done.
+        let mut left = pending.iter().filter(|&&p| p != 0).count();
+        let mut j = 0;
+        while left > 0 {
+            j = next_pending(&pending, j);
+            match pending[j] {
+                0 => break, // cannot happen: `left` counts the pending points
+                OTHER => {
+                    pending[j] = 0;
+                    left -= 1;
+                    self.other_point(f, batch, j, &labels);
+                }
+                _ => {
+                    let done = self.add_voxel(f, batch, (&mut pending, &votes), j);
+                    left = left.saturating_sub(done);
+                }
             }
         }
     }
 
     /// Adds the points of the voxel of point `j` (its first in the batch) with one pass
-    /// over the batch, clearing them in `pending`; returns the next pending point. Votes
+    /// over the batch, clearing them in `pending`; returns how many they were. Votes
     /// for the class of point `j` are counted in the pass; others (rare: a voxel on the
     /// border of two objects) are taken one by one.
     #[inline(always)]
@@ -241,20 +250,23 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         // `class` if `votes ^ base` is: other classes leave high bits set.
         let vote_key_max = vote_key_max as i64;
         let base = (class as u64) << 32;
+        // In masks (all ones for true) that vectorise to one instruction each; a count
+        // subtracts its masks.
+        let mask = |b: bool| if b { u64::MAX } else { 0 };
         let mut w = [0u64; 3];
         let (mut n, mut voting, mut for_class) = (0u64, 0u64, 0u64);
-        let mut next = BATCH;
         for i in 0..BATCH {
-            let same = if pending[i] == key { u64::MAX } else { 0 };
+            let same = mask(pending[i] == key);
             w[0] += batch.w[0][i] & same;
             w[1] += batch.w[1][i] & same;
             w[2] += batch.w[2][i] & same;
-            n += same & 1;
+            n = n.wrapping_sub(same);
             let v = votes[i];
-            voting += same & (((v & 0xffff_ffff) as i64 <= vote_key_max) as u64);
-            for_class += same & (((v ^ base) as i64 <= vote_key_max) as u64);
+            let no_vote = mask((v & 0xffff_ffff) as i64 > vote_key_max);
+            voting = voting.wrapping_sub(same & !no_vote);
+            let no_class_vote = mask((v ^ base) as i64 > vote_key_max);
+            for_class = for_class.wrapping_sub(same & !no_class_vote);
             pending[i] &= !same;
-            next = next.min(if pending[i] != 0 { i } else { BATCH });
         }
         self.add_points(f, (acc, slot), (n as u32, &w), (class, for_class as u32));
         if voting > for_class {
@@ -266,7 +278,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 }
             }
         }
-        next
+        n as usize
     }
 }
 
@@ -299,4 +311,98 @@ impl Run {
         votes: 0,
         class: 0,
     };
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use crate::testutil::*;
+    use crate::*;
+    use std::vec::Vec;
+
+    /// Frames of points in clusters that straddle voxel faces (runs switch often), with
+    /// one-class and two-class labels, classes above the map's, non-finite and zero
+    /// points, points beyond max range; then more frames on a map too small for them.
+    fn frames(rng: &mut Lcg) -> Vec<Vec<LabeledPoint>> {
+        (0..4)
+            .map(|frame| {
+                (0..700)
+                    .map(|i| {
+                        let c = (i % 9) as f32;
+                        let mut p = [
+                            0.1 * c - 0.4 + 0.02 * rng.next() as f32,
+                            0.1 * (c % 3.0) + 0.02 * rng.next() as f32,
+                            1.0 + 0.1 * frame as f32 + 0.02 * rng.next() as f32,
+                        ];
+                        match i % 53 {
+                            5 => p[2] = f32::NAN,
+                            9 => p = [0.0; 3],
+                            14 => p[2] = 30.0,
+                            _ => {}
+                        }
+                        let labels = match i % 11 {
+                            3 => Labels::top_k(&[(2, 200), (5, 120)]),
+                            7 => Labels::top1(9), // above the 6 classes
+                            _ => Labels::top1(1 + (i % 5 == 0) as u8 + (i % 13 == 0) as u8),
+                        };
+                        LabeledPoint::new(Point3::new(p[0], p[1], p[2]), labels)
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Runs `frames` through phase 1 by voxel or by runs, and the rest of each frame;
+    /// returns the reports and the snapshot.
+    fn integrate_with<const V: usize, const B: usize>(
+        frames: &[Vec<LabeledPoint>],
+        by_voxel: bool,
+    ) -> (Vec<FrameReport>, Vec<u8>) {
+        let mut cfg = Config::DEFAULT;
+        cfg.top_k = 2;
+        cfg.max_range = 4.0;
+        cfg.votes_per_frame = 4; // sampled votes from the second frame on
+        let mut map: std::boxed::Box<Map<V, B, 6>> = std::boxed::Box::new(Map::new(cfg));
+        let mut reports = Vec::new();
+        for (n, points) in frames.iter().enumerate() {
+            let mut f = map.begin_frame(&at(0.01 * n as f32, 0.0, 0.0)).unwrap();
+            let mut batch = Batch::new();
+            for chunk in points.chunks(BATCH) {
+                batch.load_points(chunk);
+                batch.convert(&f, 6);
+                batch.set_labels(|j| chunk[j].labels, &map.config, 6);
+                batch.set_vote_keys(true);
+                if by_voxel {
+                    map.accumulate_by_voxel(&mut f, &batch, |j| chunk[j].labels);
+                } else {
+                    map.accumulate_by_runs(&mut f, &batch, |j| chunk[j].labels);
+                }
+            }
+            reports.push(map.finish(&mut f, |_| {}));
+        }
+        (reports, snapshot(&*map))
+    }
+
+    #[test]
+    fn by_voxel_and_by_runs_give_the_same_map() {
+        let mut rng = Lcg(11);
+        for _ in 0..5 {
+            let frames = frames(&mut rng);
+            let (runs, runs_map) = integrate_with::<1024, 256>(&frames, false);
+            let (voxels, voxels_map) = integrate_with::<1024, 256>(&frames, true);
+            assert_eq!(runs, voxels);
+            assert_eq!(runs_map, voxels_map);
+            let r = &runs[1];
+            assert!(r.points_used > 0 && r.rejected_depth > 0 && r.rejected_label > 0);
+            assert!(r.truncated > 0);
+            // A map too small for the frames: evictions and dropped points.
+            let (runs, runs_map) = integrate_with::<8, 4>(&frames, false);
+            let (voxels, voxels_map) = integrate_with::<8, 4>(&frames, true);
+            assert_eq!(runs, voxels);
+            assert_eq!(runs_map, voxels_map);
+            assert!(runs.iter().any(|r| r.dropped_points > 0));
+        }
+    }
 }
