@@ -107,6 +107,12 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let [d0, d1, d2] = dda.t_delta;
         let [mut t0, mut t1, mut t2] = dda.t_max;
         let [mut k0, mut k1, mut k2] = start;
+        // The packed key of the current block, stepped when the walk crosses into the next
+        // one: a step of one block on an axis adds +-1 to that axis's 16-bit field.
+        let Some(mut block) = VoxelKey::from_ints(k0, k1, k2).map(|k| k.block()) else {
+            return;
+        };
+        let [b0, b1, b2] = [(s0, 32), (s1, 16), (s2, 0)].map(|(s, at)| ((s as i64) << at) as u64);
         let mut remaining: u32 = (0..3).map(|a| (end[a] - start[a]).unsigned_abs()).sum();
         // Overshooting the end by a few voxels stays in range unless an end is near it.
         let near_limit = start
@@ -114,7 +120,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             .chain(&end)
             .any(|c| c.unsigned_abs() > KEY_LIMIT as u32 - 8);
         loop {
-            let (at, mut missed) = self.enter_block(f, [k0, k1, k2]);
+            let (at, mut missed) = self.enter_block(f, block);
             let mut cell = (k0 & 3) | ((k1 & 3) << 2) | ((k2 & 3) << 4);
             loop {
                 let last = remaining == 0;
@@ -141,15 +147,15 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                     return;
                 }
                 // Whether the step leaves the block: the cell coordinate on that axis wraps.
-                let crossed = if z {
+                let (crossed, next) = if z {
                     (t2, k2, cell) = (t2 + d2, k2 + s2, cell + 16 * s2);
-                    k2 & 3 == if s2 > 0 { 0 } else { 3 }
+                    (k2 & 3 == if s2 > 0 { 0 } else { 3 }, block.wrapping_add(b2))
                 } else if y {
                     (t1, k1, cell) = (t1 + d1, k1 + s1, cell + 4 * s1);
-                    k1 & 3 == if s1 > 0 { 0 } else { 3 }
+                    (k1 & 3 == if s1 > 0 { 0 } else { 3 }, block.wrapping_add(b1))
                 } else {
                     (t0, k0, cell) = (t0 + d0, k0 + s0, cell + s0);
-                    k0 & 3 == if s0 > 0 { 0 } else { 3 }
+                    (k0 & 3 == if s0 > 0 { 0 } else { 3 }, block.wrapping_add(b0))
                 };
                 // An axis moves monotonically from the sensor's valid key towards the
                 // end's valid key: leaving the key range means overshooting, with nothing
@@ -159,17 +165,19 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                     return;
                 }
                 if crossed {
+                    block = next;
                     break;
                 }
             }
         }
     }
 
-    /// The block slot of voxel `k` (`None` when the map has no room for the block), and
-    /// the block's `missed` mask.
-    fn enter_block(&mut self, f: &mut FrameState, k: [i32; 3]) -> (Option<usize>, u64) {
-        let at = VoxelKey::from_ints(k[0], k[1], k[2])
-            .and_then(|key| self.frame_block(f, key.block(), false));
+    /// The slot of the block with packed key `block` (`None` when the map has no room for
+    /// it), and the block's `missed` mask. The walk's voxels are in the key range (it
+    /// stops before leaving it), so the key is valid.
+    #[inline(always)]
+    fn enter_block(&mut self, f: &mut FrameState, block: u64) -> (Option<usize>, u64) {
+        let at = self.ray_block(f, block);
         (at, at.map_or(0, |bs| self.blocks.slots[bs].missed))
     }
 
