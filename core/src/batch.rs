@@ -256,7 +256,7 @@ impl Batch {
         written
     }
 
-    /// World coordinates, voxel keys, offsets and the status of every loaded point, for
+    /// World coordinates, voxel keys, offsets, vote keys and the status of every loaded point, for
     /// a map with `classes` classes (a vote above is a bad label; votes set later are
     /// checked when they are set).
     pub(crate) fn convert(&mut self, f: &FrameState, classes: usize) {
@@ -278,6 +278,7 @@ impl Batch {
             q: offsets,
             w: sums,
             vote,
+            vote_key,
             status,
             ..
         } = self;
@@ -287,6 +288,9 @@ impl Batch {
             // NaN fails: the same test as `depth_point`.
             let no_depth = from_depth && !(z > 0.0 && z < f32::INFINITY);
             let bad_label = vote[j] > classes;
+            // Votes known now (one-class label images; others set theirs with the labels).
+            let hash = vote_hash(&[x, y, z]);
+            vote_key[j] = if vote[j] != 0 { hash >> 1 } else { u32::MAX };
             let r2 = x * x + y * y + z * z;
             let mut fast = r2 > 0.0 && r2 <= max2;
             let mut k = [0u32; 3];
@@ -339,7 +343,13 @@ impl Batch {
         for j in 0..self.len.min(BATCH) {
             let l = labels(self.source.index(j));
             let voting = voting_classes(&l, config);
-            self.vote[j] = voting.first().copied().unwrap_or(0);
+            let vote = voting.first().copied().unwrap_or(0);
+            self.vote[j] = vote;
+            self.vote_key[j] = if vote != 0 {
+                vote_hash(&self.point(j)) >> 1
+            } else {
+                u32::MAX
+            };
             if self.status[j] == FAST {
                 if !l.fits(classes) {
                     self.status[j] = BAD_LABEL;
@@ -347,24 +357,6 @@ impl Batch {
                     self.status[j] = SLOW;
                 }
             }
-        }
-    }
-
-    /// The vote keys of the loaded points ([`Batch::vote_key`]), from their votes:
-    /// `labelled` is false when no point can vote (the batch has no labels).
-    pub(crate) fn set_vote_keys(&mut self, labelled: bool) {
-        let n = self.len.min(BATCH);
-        if !labelled {
-            self.vote_key[..n].fill(u32::MAX);
-            return;
-        }
-        for j in 0..n {
-            let hash = vote_hash(&[self.p[0][j], self.p[1][j], self.p[2][j]]);
-            self.vote_key[j] = if self.vote[j] != 0 {
-                hash >> 1
-            } else {
-                u32::MAX
-            };
         }
     }
 

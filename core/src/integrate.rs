@@ -83,7 +83,6 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             batch.load_points(chunk);
             batch.convert(&f, C);
             batch.set_labels(|j| chunk[j].labels, &self.config, C);
-            batch.set_vote_keys(true);
             on_phase(Phase::Accumulate);
             self.accumulate(&mut f, &batch, |j| chunk[j].labels);
         }
@@ -138,16 +137,14 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         Ok(self.finish(&mut f, on_phase))
     }
 
-    /// The labels (and vote hashes) of a batch of pixels (one-class labels came with
-    /// the tile).
+    /// The labels and vote keys of a batch of pixels with top-k labels (one-class labels
+    /// came with the tile, and their vote keys with the conversion).
     fn set_pixel_labels(&self, batch: &mut Batch, image: &DepthImage<'_>) {
         match image.labels {
-            LabelImage::None => batch.set_vote_keys(false),
-            LabelImage::Top1(_) => batch.set_vote_keys(true),
+            LabelImage::None | LabelImage::Top1(_) => {}
             LabelImage::TopK(l) => {
                 let at = |i: usize| l.get(i).copied().unwrap_or(Labels::NONE);
                 batch.set_labels(at, &self.config, C);
-                batch.set_vote_keys(true);
             }
         }
     }

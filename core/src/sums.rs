@@ -373,7 +373,6 @@ mod tests {
                 batch.load_points(chunk);
                 batch.convert(&f, 6);
                 batch.set_labels(|j| chunk[j].labels, &map.config, 6);
-                batch.set_vote_keys(true);
                 if by_voxel {
                     map.accumulate_by_voxel(&mut f, &batch, |j| chunk[j].labels);
                 } else {
