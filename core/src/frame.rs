@@ -130,7 +130,7 @@ pub(crate) fn accumulator_index(key: u64) -> usize {
 /// sensor many times per frame, and a hash lookup costs a cache miss or two. A frame
 /// touches thousands of blocks at fine cells (2,243 per frame at 5 cm on the synthetic
 /// living room: with 128 entries a quarter of the rays' block entries missed the cache,
-/// with 2,048 under 1 %), so 64-bit targets get 2,048 entries (32 KiB of stack); 32-bit
+/// with 2,048 about 1 %), so 64-bit targets get 2,048 entries (32 KiB of stack); 32-bit
 /// targets, microcontrollers with a few tens of KiB of stack, 128 (2 KiB).
 pub(crate) const BLOCK_CACHE: usize = if cfg!(target_pointer_width = "64") {
     2048
