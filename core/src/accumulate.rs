@@ -134,7 +134,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             sums: PackedSums::EMPTY,
             slot: vs,
             key,
-            vote_max: vote_max(self.voxels.slots.get(vs).map_or(0, Voxel::vote_exponent)),
+            vote_key_max: vote_max(self.voxels.slots.get(vs).map_or(0, Voxel::vote_exponent)) >> 1,
         };
     }
 

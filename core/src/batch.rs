@@ -62,9 +62,9 @@ pub(crate) struct Batch {
     pub(crate) vote: [u8; BATCH],
     /// Whether a point votes, as a number to compare: half its vote-sampling hash
     /// ([`crate::vote_hash`]) if it votes for a class, else `u32::MAX`. A point votes
-    /// in a voxel if `vote_key <= vote_max >> 1`, which is `hash <= vote_max`
-    /// ([`Accumulator::vote_max`] is `2^k - 1`) for the points with a class and never
-    /// true for the others.
+    /// in a voxel if `vote_key <= vote_max >> 1` ([`Accumulator::vote_key_max`]), which
+    /// is `hash <= vote_max` (`vote_max` is `2^k - 1`) for the points with a class and
+    /// never true for the others.
     pub(crate) vote_key: [u32; BATCH],
     pub(crate) status: [u8; BATCH],
 }

@@ -105,9 +105,10 @@ pub(crate) struct Accumulator {
     pub(crate) slot: usize,
     /// The voxel's packed key (0, never a valid key, when unused).
     pub(crate) key: u64,
-    /// Its points vote if their hash is at most this: [`vote_max`] of the voxel's
-    /// vote-sampling exponent (fixed during a frame).
-    pub(crate) vote_max: u32,
+    /// Its points vote if their vote key (half their hash, see `Batch::vote_key`) is at
+    /// most this: [`vote_max`] of the voxel's vote-sampling exponent (fixed during a
+    /// frame), halved.
+    pub(crate) vote_key_max: u32,
 }
 
 impl Accumulator {
@@ -116,7 +117,7 @@ impl Accumulator {
         sums: PackedSums::EMPTY,
         slot: usize::MAX,
         key: 0,
-        vote_max: 0,
+        vote_key_max: 0,
     };
 }
 
@@ -276,30 +277,33 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         stamp
     }
 
-    /// [`Map::frame_block`] without linking, with the frame's block cache checked inline
-    /// (the free-space walk enters a block every four steps or so).
-    #[inline(always)]
-    pub(crate) fn ray_block(&mut self, f: &mut FrameState, packed: u64) -> Option<usize> {
-        match f.block_cache.get(block_cache_index(packed)) {
-            Some(&(key, slot)) if key == packed => Some(slot as usize),
-            _ => self.frame_block(f, packed, false),
-        }
-    }
-
     /// The block with packed key `packed`, created if missing, with per-frame masks
     /// current. `link` puts a newly touched block on the frame's list (phase 1).
+    ///
+    /// The frame's block cache is checked inline (the free-space walk enters a block
+    /// every four steps or so); the rest is out of line.
+    #[inline(always)]
     pub(crate) fn frame_block(
         &mut self,
         f: &mut FrameState,
         packed: u64,
         link: bool,
     ) -> Option<usize> {
-        let c = block_cache_index(packed);
-        if let Some(&(key, slot)) = f.block_cache.get(c) {
-            if key == packed {
-                return Some(slot as usize);
-            }
+        match f.block_cache.get(block_cache_index(packed)) {
+            Some(&(key, slot)) if key == packed => Some(slot as usize),
+            _ => self.frame_block_uncached(f, packed, link),
         }
+    }
+
+    /// [`Map::frame_block`] for a block not in the frame's block cache.
+    #[inline(never)]
+    fn frame_block_uncached(
+        &mut self,
+        f: &mut FrameState,
+        packed: u64,
+        link: bool,
+    ) -> Option<usize> {
+        let c = block_cache_index(packed);
         let bs = match self.blocks.find(packed) {
             Some(bs) => bs,
             None => {

@@ -177,7 +177,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// stops before leaving it), so the key is valid.
     #[inline(always)]
     fn enter_block(&mut self, f: &mut FrameState, block: u64) -> (Option<usize>, u64) {
-        let at = self.ray_block(f, block);
+        let at = self.frame_block(f, block, false);
         (at, at.map_or(0, |bs| self.blocks.slots[bs].missed))
     }
 

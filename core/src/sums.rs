@@ -86,7 +86,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     fn point_accumulator(&mut self, f: &mut FrameState, key: u64) -> (usize, usize, u32) {
         let a = accumulator_index(key);
         match f.acc.get(a) {
-            Some(acc) if acc.key == key => (a, acc.slot, acc.vote_max >> 1),
+            Some(acc) if acc.key == key => (a, acc.slot, acc.vote_key_max),
             _ => self.open_point_accumulator(f, key, a),
         }
     }
@@ -104,7 +104,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         match self.point_voxel(f, &VoxelKey::unpack(key)) {
             Some(vs) => {
                 self.open_accumulator(f, a, vs, key);
-                (a, vs, f.acc.get(a).map_or(0, |acc| acc.vote_max >> 1))
+                (a, vs, f.acc.get(a).map_or(0, |acc| acc.vote_key_max))
             }
             None => (DROPPED, usize::MAX, 0),
         }
@@ -292,8 +292,8 @@ struct Run {
     /// The run's points and the sum of their [`packed_offsets`].
     n: u32,
     w: [u64; 3],
-    /// Points vote if their `Batch::vote_key` is at most this: the voxel's
-    /// [`Accumulator::vote_max`] halved.
+    /// Points vote if their `Batch::vote_key` is at most this (the voxel's
+    /// [`Accumulator::vote_key_max`]).
     vote_key_max: u32,
     /// The run's voting points so far, all for `class`.
     votes: u32,
