@@ -22,6 +22,45 @@ use nalgebra::Vector3;
 /// Prepared-Gaussian cache of phase 3 (voxel statistics no longer change then).
 type GaussCache = PrepCache<32>;
 
+/// A free-space ray in voxel units (`o` to `target`, from the sensor's voxel `start` to
+/// the end voxel `end`, which gets a miss only if `include_end`) and in world metres.
+struct Segment {
+    o: [f32; 3],
+    target: [f32; 3],
+    start: [i32; 3],
+    end: [i32; 3],
+    include_end: bool,
+    ray: Ray,
+}
+
+impl Segment {
+    /// The segment from the frame's sensor to `target` (voxel units) in voxel `end`.
+    fn new(f: &FrameState, target: [f32; 3], end: &VoxelKey, include_end: bool) -> Segment {
+        let o = f.origin_s;
+        let d = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
+        let len_s = libm::sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        let ray = Ray {
+            origin: f.origin,
+            dir: if len_s > 0.0 {
+                [d[0] / len_s, d[1] / len_s, d[2] / len_s]
+            } else {
+                [0.0, 0.0, 1.0]
+            },
+            len: len_s * f.h,
+            measured: !include_end,
+        };
+        let k = f.origin_key;
+        Segment {
+            o,
+            target,
+            start: [k.x as i32, k.y as i32, k.z as i32],
+            end: [end.x as i32, end.y as i32, end.z as i32],
+            include_end,
+            ray,
+        }
+    }
+}
+
 /// A free-space ray in world metres.
 struct Ray {
     origin: [f32; 3],
@@ -63,111 +102,150 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         include_end: bool,
     ) {
         f.report.rays += 1;
-        let o = f.origin_s;
-        let d = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
-        let len_s = libm::sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-        let ray = Ray {
-            origin: f.origin,
-            dir: if len_s > 0.0 {
-                [d[0] / len_s, d[1] / len_s, d[2] / len_s]
-            } else {
-                [0.0, 0.0, 1.0]
-            },
-            len: len_s * f.h,
-            measured: !include_end,
-        };
-        let start = [
-            f.origin_key.x as i32,
-            f.origin_key.y as i32,
-            f.origin_key.z as i32,
-        ];
-        let e = [end.x as i32, end.y as i32, end.z as i32];
-        self.walk(f, cache, &ray, (o, target), (start, e), include_end);
+        let seg = Segment::new(f, target, end, include_end);
+        // Overshooting the end by a few voxels stays in range unless an end is near it.
+        let near_limit =
+            (seg.start.iter().chain(&seg.end)).any(|c| c.unsigned_abs() > KEY_LIMIT as u32 - 8);
+        if near_limit {
+            self.walk_checked(f, cache, &seg);
+        } else {
+            self.walk(f, cache, &seg);
+        }
     }
 
-    /// The traversal of [`traverse`] (same voxels, same order), specialised for misses: an
-    /// outer loop per block and an inner loop per voxel that keeps the walk in registers
-    /// (the block's slot and `missed` mask, the cell index, the position in the block), so
-    /// a voxel that already has its miss costs one bit test and one step; most visits are
-    /// such voxels, as the rays of a frame share their start. The end voxel can only be
-    /// reached with the last of the `|end - start|_1` steps, so the loop counts steps
-    /// instead of comparing keys.
-    fn walk(
+    /// The traversal of [`traverse`] (same voxels, same order), specialised for misses,
+    /// for a segment that stays in the key range. The walk keeps only what a step needs
+    /// in registers: the cell index in the current block, the block's `missed` mask, and
+    /// per axis the boundary parameter and the voxels left before the next block. A
+    /// voxel that already has its miss (most visits: the rays of a frame share their
+    /// start) costs one bit test and one step; the voxel key is rebuilt from block and
+    /// cell only for a miss and at the end. The end voxel can only be reached with the
+    /// last of the `|end - start|_1` steps, so the loop counts steps instead of
+    /// comparing keys.
+    fn walk(&mut self, f: &mut FrameState, cache: &mut GaussCache, seg: &Segment) {
+        let (o, target, start, end) = (seg.o, seg.target, seg.start, seg.end);
+        let dda = Dda::new(o, [0, 1, 2].map(|a| target[a] - o[a]), start);
+        let [d0, d1, d2] = dda.t_delta;
+        let [mut t0, mut t1, mut t2] = dda.t_max;
+        let Some(key) = VoxelKey::from_ints(start[0], start[1], start[2]) else {
+            return;
+        };
+        let (mut block, mut cell) = (key.block(), key.cell());
+        // Per axis: the step of the packed block key (+-1 in that axis's 16-bit field),
+        // the step of the cell index, and the steps left before the walk leaves the block
+        // (then the axis's cell field wraps 3 <-> 0: `cell ^ mask`).
+        let axis = |a: usize, at: u32| {
+            let s = dda.step[a];
+            let c = (start[a] & 3) as u32;
+            let left = if s > 0 { 3 - c } else { c };
+            (((s as i64) << at) as u64, (s << (2 * a)) as u32, left)
+        };
+        let (b0, c0, mut left0) = axis(0, 32);
+        let (b1, c1, mut left1) = axis(1, 16);
+        let (b2, c2, mut left2) = axis(2, 0);
+        let mut remaining: u32 = (0..3).map(|a| (end[a] - start[a]).unsigned_abs()).sum();
+        let (mut at, mut missed) = self.enter_block(f, block);
+        loop {
+            if !has_cell(missed, cell) {
+                match self.walk_visit(f, cache, seg, at, (block, cell), remaining == 0) {
+                    Some(m) => missed = m,
+                    None => return,
+                }
+            }
+            if remaining == 0 {
+                return;
+            }
+            remaining -= 1;
+            // The next boundary: the lowest axis on ties, as `Dda::next_axis`.
+            let y = t1 < t0;
+            let t01 = if y { t1 } else { t0 };
+            let z = t2 < t01;
+            if (if z { t2 } else { t01 }) > 1.0 + 1e-4 {
+                return;
+            }
+            // Within the block the cell index moves; across a boundary the axis's cell
+            // field wraps and the block key steps.
+            let crossed = if z {
+                t2 += d2;
+                step_axis(&mut left2, &mut cell, c2, 48, b2)
+            } else if y {
+                t1 += d1;
+                step_axis(&mut left1, &mut cell, c1, 12, b1)
+            } else {
+                t0 += d0;
+                step_axis(&mut left0, &mut cell, c0, 3, b0)
+            };
+            if let Some(block_step) = crossed {
+                block = block.wrapping_add(block_step);
+                (at, missed) = self.enter_block(f, block);
+            }
+        }
+    }
+
+    /// [`Map::visit`] for the walk's voxel in cell `cell` of block `block`, unless it is
+    /// the excluded end (`None`: the walk stops). Out of line on 32-bit targets: most
+    /// steps do not visit, and the walk's loop needs every register there.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
+    #[cfg_attr(not(target_pointer_width = "64"), inline(never))]
+    fn walk_visit(
+        &mut self,
+        f: &mut FrameState,
+        cache: &mut GaussCache,
+        seg: &Segment,
+        at: Option<usize>,
+        (block, cell): (u64, u32),
+        last: bool,
+    ) -> Option<u64> {
+        let voxel = VoxelKey::from_block_cell(block, cell);
+        if last && !seg.include_end && voxel == key_of(seg.end) {
+            return None;
+        }
+        Some(self.visit(f, cache, &seg.ray, at, voxel))
+    }
+
+    /// [`Map::walk`] for a segment that may leave the key range: the voxel-by-voxel
+    /// [`traverse`], stopping at the first voxel outside the range (an axis moves
+    /// monotonically, so nothing valid follows).
+    fn walk_checked(&mut self, f: &mut FrameState, cache: &mut GaussCache, seg: &Segment) {
+        traverse(
+            seg.o,
+            seg.target,
+            seg.start,
+            seg.end,
+            seg.include_end,
+            |k| {
+                let Some(voxel) = VoxelKey::from_ints(k[0], k[1], k[2]) else {
+                    return false;
+                };
+                let (at, missed) = self.enter_block(f, voxel.block());
+                if !has_cell(missed, voxel.cell()) {
+                    self.visit(f, cache, &seg.ray, at, voxel);
+                }
+                true
+            },
+        );
+    }
+
+    /// A traversed voxel without its miss yet this frame, in block slot `at` (`None`:
+    /// the map had no room for its block, the miss is dropped): gives it the miss and
+    /// returns the block's new `missed` mask.
+    #[inline(always)]
+    fn visit(
         &mut self,
         f: &mut FrameState,
         cache: &mut GaussCache,
         ray: &Ray,
-        (o, target): ([f32; 3], [f32; 3]),
-        (start, end): ([i32; 3], [i32; 3]),
-        include_end: bool,
-    ) {
-        let d = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
-        let dda = Dda::new(o, d, start);
-        let [s0, s1, s2] = dda.step;
-        let [d0, d1, d2] = dda.t_delta;
-        let [mut t0, mut t1, mut t2] = dda.t_max;
-        let [mut k0, mut k1, mut k2] = start;
-        // The packed key of the current block, stepped when the walk crosses into the next
-        // one: a step of one block on an axis adds +-1 to that axis's 16-bit field.
-        let Some(mut block) = VoxelKey::from_ints(k0, k1, k2).map(|k| k.block()) else {
-            return;
-        };
-        let [b0, b1, b2] = [(s0, 32), (s1, 16), (s2, 0)].map(|(s, at)| ((s as i64) << at) as u64);
-        let mut remaining: u32 = (0..3).map(|a| (end[a] - start[a]).unsigned_abs()).sum();
-        // Overshooting the end by a few voxels stays in range unless an end is near it.
-        let near_limit = start
-            .iter()
-            .chain(&end)
-            .any(|c| c.unsigned_abs() > KEY_LIMIT as u32 - 8);
-        loop {
-            let (at, mut missed) = self.enter_block(f, block);
-            let mut cell = (k0 & 3) | ((k1 & 3) << 2) | ((k2 & 3) << 4);
-            loop {
-                let last = remaining == 0;
-                if last && !include_end && [k0, k1, k2] == end {
-                    return;
-                }
-                match at {
-                    Some(bs) if missed & (1u64 << cell) == 0 => {
-                        self.miss(f, cache, ray, &[k0, k1, k2], bs, cell as u32);
-                        missed = self.blocks.slots[bs].missed;
-                    }
-                    Some(_) => {}
-                    None => f.report.dropped_misses = f.report.dropped_misses.saturating_add(1),
-                }
-                if last {
-                    return;
-                }
-                remaining -= 1;
-                // The next boundary: the lowest axis on ties, as `Dda::next_axis`.
-                let y = t1 < t0;
-                let t01 = if y { t1 } else { t0 };
-                let z = t2 < t01;
-                if (if z { t2 } else { t01 }) > 1.0 + 1e-4 {
-                    return;
-                }
-                // Whether the step leaves the block: the cell coordinate on that axis wraps.
-                let (crossed, next) = if z {
-                    (t2, k2, cell) = (t2 + d2, k2 + s2, cell + 16 * s2);
-                    (k2 & 3 == if s2 > 0 { 0 } else { 3 }, block.wrapping_add(b2))
-                } else if y {
-                    (t1, k1, cell) = (t1 + d1, k1 + s1, cell + 4 * s1);
-                    (k1 & 3 == if s1 > 0 { 0 } else { 3 }, block.wrapping_add(b1))
-                } else {
-                    (t0, k0, cell) = (t0 + d0, k0 + s0, cell + s0);
-                    (k0 & 3 == if s0 > 0 { 0 } else { 3 }, block.wrapping_add(b0))
-                };
-                // An axis moves monotonically from the sensor's valid key towards the
-                // end's valid key: leaving the key range means overshooting, with nothing
-                // valid after.
-                if near_limit && (k0.max(k1).max(k2) > KEY_LIMIT || k0.min(k1).min(k2) < -KEY_LIMIT)
-                {
-                    return;
-                }
-                if crossed {
-                    block = next;
-                    break;
-                }
+        at: Option<usize>,
+        voxel: VoxelKey,
+    ) -> u64 {
+        match at {
+            Some(bs) => {
+                self.miss(f, cache, ray, &voxel, bs);
+                self.blocks.slots[bs].missed
+            }
+            None => {
+                f.report.dropped_misses = f.report.dropped_misses.saturating_add(1);
+                0
             }
         }
     }
@@ -181,23 +259,21 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         (at, at.map_or(0, |bs| self.blocks.slots[bs].missed))
     }
 
-    /// The miss of voxel `k` (in block slot `bs`, cell `cell`, without a miss yet this
+    /// The miss of `voxel` (its block in slot `bs`, without a miss yet this
     /// frame) for `ray`.
     fn miss(
         &mut self,
         f: &mut FrameState,
         cache: &mut GaussCache,
         ray: &Ray,
-        k: &[i32; 3],
+        voxel: &VoxelKey,
         bs: usize,
-        cell: u32,
     ) {
-        let bit = 1u64 << cell;
+        let bit = 1u64 << voxel.cell();
         let cfg = &self.config;
         let mut delta = f.miss;
         if self.blocks.slots[bs].surface & bit != 0 && cfg.miss_model == MissModel::NdtOm {
-            let packed = VoxelKey::from_ints(k[0], k[1], k[2]).map_or(0, |key| key.packed());
-            if let Some(vs) = self.voxels.find(packed) {
+            if let Some(vs) = self.voxels.find(voxel.packed()) {
                 let v = &self.voxels.slots[vs];
                 if v.n >= cfg.n_min {
                     let g = cache.get(vs, || v.prepared(cfg));
@@ -211,21 +287,22 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let (lo, hi) = f.clamp;
         let b = &mut self.blocks.slots[bs];
         b.missed |= bit;
-        b.add_logodds(cell, delta, lo, hi);
+        b.add_logodds(voxel.cell(), delta, lo, hi);
     }
 }
 
 /// Exact voxel traversal (Amanatides & Woo) of the segment from `o` to `target` (voxel
 /// units) starting in voxel `start` and ending in `end`, visiting `end` only if
 /// `include_end`. Axis ties step the lowest axis first; at most the Manhattan distance
-/// between the keys plus one voxels are visited.
+/// between the keys plus one voxels are visited. The walk stops early when `visit`
+/// returns `false`.
 fn traverse(
     o: [f32; 3],
     target: [f32; 3],
     start: [i32; 3],
     end: [i32; 3],
     include_end: bool,
-    mut visit: impl FnMut([i32; 3]),
+    mut visit: impl FnMut([i32; 3]) -> bool,
 ) {
     let d = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
     let mut dda = Dda::new(o, d, start);
@@ -237,7 +314,9 @@ fn traverse(
             }
             return;
         }
-        visit(dda.k);
+        if !visit(dda.k) {
+            return;
+        }
         let (a, t) = dda.next_axis();
         if t > 1.0 + 1e-4 {
             return;
@@ -282,6 +361,7 @@ pub fn voxels_on_segment(
         if let Some(key) = VoxelKey::from_ints(k[0], k[1], k[2]) {
             visit(key);
         }
+        true
     });
     true
 }
@@ -312,6 +392,53 @@ fn ndt_om_miss(cfg: &Config, ray: &Ray, g: &Prepared) -> Option<f32> {
     };
     let p = 0.5 - cfg.lambda * p_n * (1.0 - p_z);
     Some(libm::logf(p / (1.0 - p)))
+}
+
+/// Whether bit `cell` (0..64) of a block mask is set; on 32-bit targets a test of one
+/// 32-bit half, not a 64-bit shift.
+#[inline(always)]
+fn has_cell(mask: u64, cell: u32) -> bool {
+    if cfg!(target_pointer_width = "64") {
+        (mask >> (cell & 63)) & 1 != 0
+    } else {
+        let half = if cell & 32 != 0 {
+            (mask >> 32) as u32
+        } else {
+            mask as u32
+        };
+        (half >> (cell & 31)) & 1 != 0
+    }
+}
+
+/// One walk step on an axis with `left` voxels to go in the block: the cell index moves
+/// by `cell_step`, or on leaving the block the axis's field (`wrap`) flips 3 <-> 0 and the
+/// block key's step `block_step` is returned.
+#[inline(always)]
+fn step_axis(
+    left: &mut u32,
+    cell: &mut u32,
+    cell_step: u32,
+    wrap: u32,
+    block_step: u64,
+) -> Option<u64> {
+    if *left > 0 {
+        *left -= 1;
+        *cell = cell.wrapping_add(cell_step);
+        None
+    } else {
+        *left = 3;
+        *cell ^= wrap;
+        Some(block_step)
+    }
+}
+
+/// The key of in-range voxel coordinates (the walk's ends are valid keys).
+fn key_of(k: [i32; 3]) -> VoxelKey {
+    VoxelKey {
+        x: k[0] as i16,
+        y: k[1] as i16,
+        z: k[2] as i16,
+    }
 }
 
 /// Centre of a voxel in voxel units.
@@ -495,6 +622,63 @@ mod tests {
         assert_eq!(below, -820); // an ordinary voxel on the same ray was cleared twice
         let (before, after, _) = run(MissModel::Constant);
         assert_eq!((before, after), (870, 870 - 410));
+    }
+
+    /// The fast walk and the checked `traverse` give every voxel the same miss, ray
+    /// after ray, in a map with Gaussians (NDT-OM misses), with and without the end
+    /// voxel, and in a map too small for the blocks the rays cross (dropped misses).
+    #[test]
+    fn walk_is_the_checked_traverse() {
+        fn run<const B: usize>(checked: bool, seed: u64) -> (FrameReport, Vec<u8>) {
+            let mut rng = Lcg(seed);
+            let cfg = Config::with_cell_size(0.1);
+            let mut map: Map<2048, B, 4> = Map::try_new(cfg).unwrap();
+            // A wall of points 2-3 m away gives voxels with Gaussians.
+            let wall: Vec<_> = (0..400)
+                .map(|_| {
+                    let (u, v, w) = (rng.next(), rng.next(), rng.next());
+                    lp(
+                        u as f32 * 2.0 - 1.0,
+                        v as f32 * 2.0 - 1.0,
+                        2.0 + w as f32,
+                        1,
+                    )
+                })
+                .collect();
+            map.integrate(&at(0.03, 0.07, 0.0), &wall).unwrap();
+            let mut f = map.begin_frame(&at(0.13, -0.21, 0.05)).unwrap();
+            let mut cache = GaussCache::new();
+            for i in 0..300 {
+                let (u, v, w) = (rng.next(), rng.next(), rng.next());
+                let target = [
+                    (u * 30.0 - 15.0) as f32,
+                    (v * 30.0 - 15.0) as f32,
+                    (w * 40.0 - 5.0) as f32,
+                ];
+                let end = key(
+                    libm::floorf(target[0]) as i16,
+                    libm::floorf(target[1]) as i16,
+                    libm::floorf(target[2]) as i16,
+                );
+                // In a frame the end voxel's block exists (it got the hit or the far end).
+                map.frame_block(&mut f, end.block(), false);
+                let seg = Segment::new(&f, target, &end, i % 3 == 0);
+                if checked {
+                    map.walk_checked(&mut f, &mut cache, &seg);
+                } else {
+                    map.walk(&mut f, &mut cache, &seg);
+                }
+            }
+            (f.report, snapshot(&map))
+        }
+        for seed in [1, 2, 3] {
+            let (fast, checked) = (run::<512>(false, seed), run::<512>(true, seed));
+            assert_eq!(fast.0.dropped_misses, 0);
+            assert!(fast.1 == checked.1, "seed {seed}");
+            let (fast, checked) = (run::<40>(false, seed), run::<40>(true, seed));
+            assert!(fast.0.dropped_misses > 0);
+            assert_eq!(fast, checked);
+        }
     }
 
     /// Regression: `lambda = 0.5` is valid. A truncated ray (p_z = 0) through a Gaussian's mean gives

@@ -255,7 +255,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let mask = |b: bool| if b { u64::MAX } else { 0 };
         let mut w = [0u64; 3];
         let (mut n, mut voting, mut for_class) = (0u64, 0u64, 0u64);
-        for i in 0..BATCH {
+        // Points before `j` are done (pending 0): the pass starts at `j`'s group of 8.
+        for i in (j & !7)..BATCH {
             let same = mask(pending[i] == key);
             w[0] += batch.w[0][i] & same;
             w[1] += batch.w[1][i] & same;
