@@ -261,6 +261,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
 
     /// The miss of `voxel` (its block in slot `bs`, without a miss yet this
     /// frame) for `ray`.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn miss(
         &mut self,
         f: &mut FrameState,
