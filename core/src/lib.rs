@@ -99,6 +99,7 @@ mod votes;
 mod evict;
 mod raycast;
 mod snapshot;
+mod splat;
 
 mod frame;
 

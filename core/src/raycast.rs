@@ -1,28 +1,22 @@
-//! Ray casting against the map's Gaussians (rendering, `render.rs`, casts one ray per
-//! pixel through the same code).
+//! Ray casting against the map's Gaussians: [`Map::raycast`], one ray at a time.
 //!
 //! A ray walks the grid by DDA; around every traversed voxel it examines the 3x3x3
 //! neighbourhood (each neighbour exactly once per ray, by adding only the 9 cells of the new
 //! face at each step) for occupied voxels with a valid Gaussian and computes where the ray
-//! enters the ellipsoid of Mahalanobis radius `r`: with `a = u^T S^-1 u`,
-//! `b = 2 u^T S^-1 (s - mu)`, `c = (s - mu)^T S^-1 (s - mu)`, the ray's squared distance is
-//! `a t^2 + b t + c`, minimal `D2 = c - b^2 / 4a` at `t* = -b / 2a`, and it enters at
-//! `t = t* - sqrt((r^2 - D2) / a)`. Ellipsoids that contain the origin are skipped. The hit
-//! is the smallest `(t, key)`, so the order in which candidates are examined does not matter.
+//! enters the ellipsoid of Mahalanobis radius `r` ([`Prep::enter`]). Ellipsoids that
+//! contain the origin are skipped. The hit is the smallest `(t, key)`, so the order in
+//! which candidates are examined does not matter, and the walk stops 2.5 cells beyond the
+//! best hit so far. A face is intersected with the `surface` masks of the at most four
+//! blocks it touches, so only cells that hold an NDT voxel are looked at.
 //!
-//! Speed (the same result as examining every cell one by one):
-//!
-//! * a face (or the first 3x3x3 cube) is intersected with the `surface` masks of the at most
-//!   four blocks it touches, so only cells that hold an NDT voxel are looked at;
-//! * [`Map::render`] also keeps, per block, the mask of cells that have a surface cell
-//!   within one cell (the block's surface dilated by one, its 26 neighbours included): a DDA
-//!   voxel outside that mask has no candidate in its new face, and the face is skipped;
-//! * prepared Gaussians (inverse covariance, offset to the origin, `c`, class, validity) are
-//!   cached by (block slot, cell), so a cache hit needs no voxel lookup;
+//! Whole images are rendered differently (`render.rs`: every visible Gaussian drawn over
+//! the pixels it covers), with the per-pixel test [`Prep::enter`] shared, so both give the
+//! same distances.
 
 use crate::block::bits;
 use crate::dda::Dda;
-use crate::key::{hash, VoxelKey, KEY_LIMIT};
+use crate::gaussian::Prepared;
+use crate::key::{VoxelKey, KEY_LIMIT};
 use crate::map::Map;
 use crate::voxel::argmax;
 use nalgebra::{Matrix3, Point3, Vector3};
@@ -44,49 +38,72 @@ const RAY_PREPS: usize = 4;
 
 /// A voxel's Gaussian prepared for rays from one origin.
 #[derive(Clone, Copy)]
-struct Prep {
-    /// `(block slot + 1) << 6 | cell`; 0 = empty entry.
-    tag: u64,
+pub(crate) struct Prep {
     /// Inverse covariance (eigenvalue floor applied).
-    inv: Matrix3<f32>,
+    pub(crate) inv: Matrix3<f32>,
     /// Origin minus mean.
-    d: Vector3<f32>,
-    /// `d^T inv d`.
-    c: f32,
+    pub(crate) d: Vector3<f32>,
     /// Class of the voxel (0 = void).
-    class: u8,
-    /// False when the voxel cannot be hit: missing, `n < n_min`, or the origin is inside.
-    ok: bool,
+    pub(crate) class: u8,
 }
 
-/// Everything cached while the map does not change and the origin stays put (one render
-/// call, or one raycast). `G` prepared Gaussians; `D` dilated masks (0 = no skipping).
-pub(crate) struct Scratch<const G: usize, const D: usize> {
-    preps: [Prep; G],
-    /// `(packed block key, dilated surface mask)`, key 0 = empty.
-    dilated: [(u64, u64); D],
+impl Prep {
+    /// `g` seen from `origin`, or `None` when its ellipsoid of squared radius `r2` contains
+    /// the origin (such a Gaussian is never hit).
+    #[inline]
+    pub(crate) fn new(g: &Prepared, class: u8, origin: &Vector3<f32>, r2: f32) -> Option<Prep> {
+        let d = origin - g.mean;
+        let c = d.dot(&(g.inv * d));
+        // NaN falls through to the ray test, which rejects it.
+        if matches!(
+            c.partial_cmp(&r2),
+            Some(core::cmp::Ordering::Less | core::cmp::Ordering::Equal)
+        ) {
+            return None;
+        }
+        Some(Prep {
+            inv: g.inv,
+            d,
+            class,
+        })
+    }
+
+    /// Where the ray from the origin along the unit vector `u` enters the ellipsoid of
+    /// squared Mahalanobis radius `r2`, if that is within `0..=max_t`: with
+    /// `a = u^T S^-1 u` and `b = 2 u^T S^-1 d`, the closest approach is at `t* = -b / 2a`
+    /// with squared distance `D2`, and the ray enters at `t* - sqrt((r2 - D2) / a)`.
+    #[inline(always)]
+    pub(crate) fn enter(&self, u: &Vector3<f32>, r2: f32, max_t: f32) -> Option<f32> {
+        let w = self.inv * u;
+        let a = u.dot(&w);
+        let bq = 2.0 * w.dot(&self.d);
+        if a.is_nan() || a <= 0.0 {
+            return None;
+        }
+        // `D2` evaluated at the closest point (e = d + t* u) rather than as `c - b^2/4a`:
+        // for thin surface Gaussians `c` reaches ~1e7 and the subtraction cancels to noise
+        // in f32 (the f64 reference showed it flipping hits at 5 cm).
+        let t_star = -bq / (2.0 * a);
+        let e = self.d + u * t_star;
+        let d2 = e.dot(&(self.inv * e));
+        if d2 > r2 {
+            return None;
+        }
+        let t = t_star - libm::sqrtf((r2 - d2) / a);
+        if !(t >= 0.0 && t <= max_t) {
+            return None;
+        }
+        Some(t)
+    }
+}
+
+/// Caches of one ray: prepared Gaussians and the blocks of the walk.
+struct Scratch {
+    /// `((block slot + 1) << 6 | cell, prepared or None when it cannot be hit)`.
+    preps: [(u64, Option<Prep>); RAY_PREPS],
     /// `(packed block key, slot + 1 or 0 when absent, surface mask)` by the parity of the
     /// block coordinates: the blocks of a 2x2x2 neighbourhood never evict each other.
     blocks: [(u64, u32, u64); 8],
-}
-
-impl<const G: usize, const D: usize> Scratch<G, D> {
-    pub(crate) fn new() -> Self {
-        const { assert!(G >= 1, "at least one prepared-Gaussian entry") };
-        let empty = Prep {
-            tag: 0,
-            inv: Matrix3::zeros(),
-            d: Vector3::zeros(),
-            c: 0.0,
-            class: 0,
-            ok: false,
-        };
-        Scratch {
-            preps: [empty; G],
-            dilated: [(0, 0); D],
-            blocks: [(0, 0, 0); 8],
-        }
-    }
 }
 
 /// Per-ray state.
@@ -124,31 +141,6 @@ fn box_mask(lo: [i32; 3], hi: [i32; 3]) -> u64 {
     x & y & z
 }
 
-/// Cells with the given block-local coordinate on one axis.
-const LAYER: [[u64; 4]; 3] = {
-    let mut t = [[0u64; 4]; 3];
-    let mut cell = 0;
-    while cell < 64 {
-        t[0][cell & 3] |= 1 << cell;
-        t[1][(cell >> 2) & 3] |= 1 << cell;
-        t[2][(cell >> 4) & 3] |= 1 << cell;
-        cell += 1;
-    }
-    t
-};
-
-/// Dilates mask `m` by one cell along `axis` inside the block, adding the neighbouring
-/// blocks' boundary layers (`below` on the low side, `above` on the high side).
-#[inline]
-fn dilate(m: u64, below: u64, above: u64, axis: usize) -> u64 {
-    let s = [1u32, 4, 16][axis];
-    let (first, last) = (LAYER[axis][0], LAYER[axis][3]);
-    m | ((m & !last) << s)
-        | ((m & !first) >> s)
-        | ((above & first) << (3 * s))
-        | ((below & last) >> (3 * s))
-}
-
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// The first occupied Gaussian the ray from `origin` along `dir` enters within `max_t`
     /// metres. `dir` need not be normalised; a zero or non-finite input gives `None`.
@@ -167,17 +159,6 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// assert!(map.raycast(&Point3::new(0.05, 0.05, 0.0), &-Vector3::z(), 3.0).is_none());
     /// ```
     pub fn raycast(&self, origin: &Point3<f32>, dir: &Vector3<f32>, max_t: f32) -> Option<RayHit> {
-        self.raycast_in(&mut Scratch::<RAY_PREPS, 0>::new(), origin, dir, max_t)
-    }
-
-    /// [`Map::raycast`] with caches that stay valid while `origin` is unchanged.
-    pub(crate) fn raycast_in<const G: usize, const D: usize>(
-        &self,
-        s: &mut Scratch<G, D>,
-        origin: &Point3<f32>,
-        dir: &Vector3<f32>,
-        max_t: f32,
-    ) -> Option<RayHit> {
         let n = dir.norm();
         let finite = origin.coords.iter().all(|x| x.is_finite());
         if !(finite && n.is_finite() && n > 0.0 && max_t > 0.0) {
@@ -191,6 +172,10 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let o = [origin.x * inv, origin.y * inv, origin.z * inv];
         let k = [start.x as i32, start.y as i32, start.z as i32];
         let mut dda = Dda::new(o, [u.x, u.y, u.z], k);
+        let mut s = Scratch {
+            preps: [(0, None); RAY_PREPS],
+            blocks: [(0, 0, 0); 8],
+        };
         let mut ray = Ray {
             origin: Vector3::new(origin.x, origin.y, origin.z),
             u,
@@ -198,11 +183,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             r2: cfg.render_radius * cfg.render_radius,
             best: None,
         };
-        // Block coordinates and dilated mask of the DDA voxel's block (none yet).
-        let mut near = ([i32::MIN; 3], 0u64);
-        if self.near_surface(s, &mut near, k) {
-            self.examine_box(s, &mut ray, k.map(|v| v - 1), k.map(|v| v + 1));
-        }
+        self.examine_box(&mut s, &mut ray, k.map(|v| v - 1), k.map(|v| v + 1));
         // No ray can walk farther than across the whole key range.
         let max_t = max_t.min(h * 4.0 * (KEY_LIMIT + 1) as f32);
         let max_steps = ((max_t / h) as u32).saturating_mul(3).saturating_add(12);
@@ -219,90 +200,19 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 }
             }
             dda.advance(a);
-            if !self.near_surface(s, &mut near, dda.k) {
-                continue;
-            }
             // Only the 9 cells of the neighbourhood's new face are unseen.
             let (mut lo, mut hi) = (dda.k.map(|v| v - 1), dda.k.map(|v| v + 1));
             let f = dda.k[a] + dda.step(a);
             lo[a] = f;
             hi[a] = f;
-            self.examine_box(s, &mut ray, lo, hi);
+            self.examine_box(&mut s, &mut ray, lo, hi);
         }
         ray.best
     }
 
-    /// Whether the 3x3x3 neighbourhood of voxel `k` may hold a surface cell. `near` caches
-    /// the dilated mask of the block last asked about.
-    #[inline]
-    fn near_surface<const G: usize, const D: usize>(
-        &self,
-        s: &mut Scratch<G, D>,
-        near: &mut ([i32; 3], u64),
-        k: [i32; 3],
-    ) -> bool {
-        if D == 0 {
-            return true;
-        }
-        let b = k.map(|v| v >> 2);
-        if b != near.0 {
-            *near = (b, self.dilated(s, b));
-        }
-        let cell = (k[0] & 3) | ((k[1] & 3) << 2) | ((k[2] & 3) << 4);
-        (near.1 >> cell) & 1 != 0
-    }
-
-    /// Cells of block `b` with a surface cell within one cell (in any block), through the
-    /// scratch's cache; all ones for blocks outside the key range.
-    fn dilated<const G: usize, const D: usize>(&self, s: &mut Scratch<G, D>, b: [i32; 3]) -> u64 {
-        let Some(packed) = block_packed(b) else {
-            return u64::MAX;
-        };
-        let i = hash(packed) as usize % D.max(1);
-        if let Some(e) = s.dilated.get(i) {
-            if e.0 == packed {
-                return e.1;
-            }
-        }
-        // Surface masks of the 27 blocks around b, [z][y][x] with offsets -1..=1.
-        let mut m = [[[0u64; 3]; 3]; 3];
-        for (dz, plane) in m.iter_mut().enumerate() {
-            for (dy, row) in plane.iter_mut().enumerate() {
-                for (dx, mask) in row.iter_mut().enumerate() {
-                    let nb = [
-                        b[0] + dx as i32 - 1,
-                        b[1] + dy as i32 - 1,
-                        b[2] + dz as i32 - 1,
-                    ];
-                    *mask = block_packed(nb)
-                        .and_then(|p| self.blocks.find(p))
-                        .and_then(|slot| self.blocks.slots.get(slot))
-                        .map_or(0, |blk| blk.surface);
-                }
-            }
-        }
-        // Separable dilation: along x in all 9 rows, along y in the 3 planes, then along z.
-        let mut plane_masks = [0u64; 3];
-        for (plane, out) in m.iter().zip(plane_masks.iter_mut()) {
-            let r = plane.map(|row| dilate(row[1], row[0], row[2], 0));
-            *out = dilate(r[1], r[0], r[2], 1);
-        }
-        let mask = dilate(plane_masks[1], plane_masks[0], plane_masks[2], 2);
-        if let Some(e) = s.dilated.get_mut(i) {
-            *e = (packed, mask);
-        }
-        mask
-    }
-
     /// Examines every surface cell in the box `lo..=hi` (voxel keys, at most 2 blocks wide
     /// on each axis).
-    fn examine_box<const G: usize, const D: usize>(
-        &self,
-        s: &mut Scratch<G, D>,
-        ray: &mut Ray,
-        lo: [i32; 3],
-        hi: [i32; 3],
-    ) {
+    fn examine_box(&self, s: &mut Scratch, ray: &mut Ray, lo: [i32; 3], hi: [i32; 3]) {
         let (b0, b1) = (lo.map(|v| v >> 2), hi.map(|v| v >> 2));
         for bz in b0[2]..=b1[2] {
             for by in b0[1]..=b1[1] {
@@ -311,9 +221,6 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                     let Some((slot, surface)) = self.block_in(s, b) else {
                         continue;
                     };
-                    if surface == 0 {
-                        continue;
-                    }
                     let base = b.map(|v| v * 4);
                     let mask = surface
                         & box_mask(
@@ -337,11 +244,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
 
     /// Slot and surface mask of the block at block coordinates `b`, through the parity cache.
     #[inline]
-    fn block_in<const G: usize, const D: usize>(
-        &self,
-        s: &mut Scratch<G, D>,
-        b: [i32; 3],
-    ) -> Option<(usize, u64)> {
+    fn block_in(&self, s: &mut Scratch, b: [i32; 3]) -> Option<(usize, u64)> {
         let packed = block_packed(b)?;
         let i = ((b[0] & 1) | ((b[1] & 1) << 1) | ((b[2] & 1) << 2)) as usize;
         let e = s.blocks.get_mut(i)?;
@@ -359,15 +262,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     /// Tests the surface cell `cell` of the block in `slot` (voxel `key`) against the ray.
-    #[inline]
-    fn examine<const G: usize, const D: usize>(
-        &self,
-        s: &mut Scratch<G, D>,
-        ray: &mut Ray,
-        slot: usize,
-        cell: u32,
-        key: VoxelKey,
-    ) {
+    fn examine(&self, s: &mut Scratch, ray: &mut Ray, slot: usize, cell: u32, key: VoxelKey) {
         let Some(blk) = self.blocks.slots.get(slot) else {
             return;
         };
@@ -375,81 +270,41 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             return;
         }
         let tag = ((slot as u64 + 1) << 6) | cell as u64;
-        let i = (tag.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40) as usize % G;
-        let Some(g) = s.preps.get_mut(i) else {
+        let Some(entry) = s.preps.get_mut(tag as usize % RAY_PREPS) else {
             return;
         };
-        if g.tag != tag {
-            *g = self.prep(tag, &key, &ray.origin, ray.r2);
+        if entry.0 != tag {
+            *entry = (tag, self.prep(&key, &ray.origin, ray.r2));
         }
-        if !g.ok {
+        let Some(p) = &entry.1 else {
             return;
-        }
-        let w = g.inv * ray.u;
-        let a = ray.u.dot(&w);
-        let bq = 2.0 * w.dot(&g.d);
-        if a.is_nan() || a <= 0.0 {
+        };
+        let Some(t) = p.enter(&ray.u, ray.r2, ray.max_t) else {
             return;
-        }
-        // Squared Mahalanobis distance of the ray's closest approach, evaluated at that
-        // point (e = d + t* u) rather than as `c - b^2/4a`: for thin surface Gaussians `c`
-        // reaches ~1e7 and the subtraction cancels to noise in f32 (the f64 reference
-        // showed it flipping hits at 5 cm).
-        let t_star = -bq / (2.0 * a);
-        let e = g.d + ray.u * t_star;
-        let d2 = e.dot(&(g.inv * e));
-        if d2 > ray.r2 {
-            return;
-        }
-        let t = t_star - libm::sqrtf((ray.r2 - d2) / a);
-        if !(t >= 0.0 && t <= ray.max_t) {
-            return;
-        }
+        };
         if ray
             .best
             .is_none_or(|best| t < best.t || (t == best.t && key < best.key))
         {
             ray.best = Some(RayHit {
                 t,
-                class: g.class,
+                class: p.class,
                 key,
             });
         }
     }
 
-    /// The prepared Gaussian of voxel `key` for rays from `origin`.
-    fn prep(&self, tag: u64, key: &VoxelKey, origin: &Vector3<f32>, r2: f32) -> Prep {
-        let cfg = &self.config;
-        let mut p = Prep {
-            tag,
-            inv: Matrix3::zeros(),
-            d: Vector3::zeros(),
-            c: 0.0,
-            class: 0,
-            ok: false,
-        };
-        let Some(v) = self
+    /// The Gaussian of voxel `key` prepared for rays from `origin`, if it can be hit.
+    fn prep(&self, key: &VoxelKey, origin: &Vector3<f32>, r2: f32) -> Option<Prep> {
+        let v = self
             .voxels
             .find(key.packed())
-            .and_then(|vs| self.voxels.slots.get(vs))
-        else {
-            return p;
-        };
-        if v.n < cfg.n_min {
-            return p;
+            .and_then(|vs| self.voxels.slots.get(vs))?;
+        if v.n < self.config.n_min {
+            return None;
         }
-        let g = v.prepared(cfg);
-        p.d = origin - g.mean;
-        p.inv = g.inv;
-        p.c = p.d.dot(&(g.inv * p.d));
-        p.class = argmax(&v.hist).map_or(0, |(c, _)| c);
-        // An ellipsoid containing the origin is never hit (NaN falls through to the ray test,
-        // which rejects it).
-        p.ok = !matches!(
-            p.c.partial_cmp(&r2),
-            Some(core::cmp::Ordering::Less | core::cmp::Ordering::Equal)
-        );
-        p
+        let class = argmax(&v.hist).map_or(0, |(c, _)| c);
+        Prep::new(&v.prepared(&self.config), class, origin, r2)
     }
 }
 

@@ -1,29 +1,108 @@
 //! Rendering: the label and distance image a pinhole camera at a pose would see in the
-//! map, one [`Map::raycast`] per pixel with caches shared by the whole image (its rays
-//! share one origin), walked in 8x8 pixel tiles whose rays visit nearly the same voxels.
+//! map, by drawing every Gaussian over the pixels it covers instead of walking a ray per
+//! pixel.
+//!
+//! Each occupied surface voxel is culled against the view by a ball around its mean that
+//! holds its ellipsoid; a survivor is prepared once ([`Prep`]: the inverse covariance with
+//! the eigenvalue floor, the offset to the camera, its class), its footprint in the image
+//! is computed (`splat.rs`: at most two column spans per row), and each pixel of the
+//! footprint gets the ray test [`Map::raycast`] uses, keeping the nearest hit in the
+//! distance buffer (a z-buffer). The result is the first Gaussian each pixel's ray enters,
+//! which is what [`Map::raycast`] returns too: its walk examines the 3x3x3 neighbourhood of
+//! every voxel it passes, and with the default render radius an ellipsoid never leaves
+//! that neighbourhood. Two Gaussians entered at exactly the same distance are decided by
+//! [`Map::raycast`] for that pixel (it breaks the tie by key).
 
+use crate::block::bits;
 use crate::camera::{validate_pose, Pinhole};
 use crate::error::Error;
+use crate::gaussian::floor_abs;
+use crate::key::VoxelKey;
 use crate::map::Map;
-use crate::raycast::Scratch;
-use nalgebra::{Isometry3, Point3, Vector3};
+use crate::raycast::Prep;
+use crate::splat::{pixel_to_ray, Footprint};
+use crate::table::Entry;
+use crate::voxel::argmax;
+use nalgebra::{Isometry3, Point3, Rotation3, Vector3};
 
 /// Label written by [`Map::render`] where a ray hits nothing (free space or unknown).
 pub const INVALID_LABEL: u8 = 255;
 
-/// Side of the square pixel tiles [`Map::render`] walks (cache locality only).
-const TILE: u32 = 8;
+/// What a render needs to know about the camera, fixed for the whole image.
+struct View {
+    origin: Vector3<f32>,
+    rot: Rotation3<f32>,
+    camera: Pinhole,
+    /// First row of the image held by the buffers, and one past the last.
+    rows: (u32, u32),
+    /// World ray of pixel coordinate `(X, Y)`: `t (X, Y, 1)`.
+    t: [Vector3<f64>; 3],
+    /// Inward normals (camera axes, unit) of the four planes through the centre and the
+    /// edges of the rendered rows: left, right, top, bottom.
+    planes: [Vector3<f32>; 4],
+    r2: f32,
+    max_t: f32,
+}
 
-/// Prepared-Gaussian cache entries of one render (64 bytes each).
-const RENDER_PREPS: usize = 512;
-/// Dilated-surface-mask cache entries of one render (16 bytes each).
-const RENDER_DILATED: usize = 512;
+impl View {
+    fn new(pose: &Isometry3<f32>, camera: &Pinhole, rows: (u32, u32), r2: f32, max_t: f32) -> View {
+        let rot = pose.rotation.to_rotation_matrix();
+        let c = camera;
+        let (xl, xr) = (-c.cx / c.fx, (c.width as f32 - c.cx) / c.fx);
+        let (yt, yb) = ((rows.0 as f32 - c.cy) / c.fy, (rows.1 as f32 - c.cy) / c.fy);
+        let planes = [
+            Vector3::new(1.0, 0.0, -xl),
+            Vector3::new(-1.0, 0.0, xr),
+            Vector3::new(0.0, 1.0, -yt),
+            Vector3::new(0.0, -1.0, yb),
+        ]
+        .map(|n| n / n.norm());
+        View {
+            origin: pose.translation.vector,
+            t: pixel_to_ray(rot.matrix(), [c.fx, c.fy, c.cx, c.cy]),
+            rot,
+            camera: *camera,
+            rows,
+            planes,
+            r2,
+            max_t,
+        }
+    }
+
+    /// Whether a ball of radius `radius` around `mean` lies outside the rendered view.
+    fn culls(&self, mean: &Vector3<f32>, radius: f32) -> bool {
+        let m = mean - self.origin;
+        let dist = m.norm();
+        let margin = radius * 1.01 + dist * 1e-5;
+        let mc = self.rot.inverse_transform_vector(&m);
+        // Behind the camera, beyond the range, or outside one of the side planes.
+        mc.z <= -margin
+            || dist - margin > self.max_t
+            || self.planes.iter().any(|n| n.dot(&mc) < -margin)
+    }
+
+    /// The unit ray of pixel `(col, row)`, computed as [`Map::raycast`] gets it from
+    /// [`Map::render`] (so both see the same bits).
+    #[inline(always)]
+    fn unit_ray(&self, col: u32, row: u32) -> Option<Vector3<f32>> {
+        let dir = self.ray(col, row);
+        let n = dir.norm();
+        (n.is_finite() && n > 0.0).then(|| dir / n)
+    }
+
+    #[inline(always)]
+    fn ray(&self, col: u32, row: u32) -> Vector3<f32> {
+        let r = self.camera.ray(col, row);
+        self.rot * Vector3::new(r[0], r[1], r[2])
+    }
+}
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// Renders what a pinhole camera at `pose` (camera to world, OpenCV axes) sees:
     /// per pixel the class of the first Gaussian hit (0 void, [`INVALID_LABEL`] for
     /// nothing) and its distance in metres along the ray (0 for nothing). Rays end at
-    /// `config.max_range`. Each pixel gets exactly what [`Map::raycast`] returns for its ray.
+    /// `config.max_range`. Each pixel gets what [`Map::raycast`] returns for its ray (see
+    /// the module documentation for the one exception, radii above the default).
     ///
     /// ```
     /// use sndt_core::*;
@@ -47,43 +126,151 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         labels: &mut [u8],
         distance: &mut [f32],
     ) -> Result<(), Error> {
-        let n = camera.pixels().ok_or(Error::InvalidImage)?;
-        if !camera.valid() || labels.len() != n || distance.len() != n {
+        self.render_rows(pose, camera, 0, labels, distance)
+    }
+
+    /// [`Map::render`] for the rows `first_row..` of the image only: `labels` and
+    /// `distance` hold whole rows of `camera.width` pixels, as many as fit in the image.
+    /// The pixels are exactly those of the whole render, so bands of rows can be rendered
+    /// on several threads.
+    ///
+    /// ```
+    /// use sndt_core::*;
+    /// let cam = Pinhole { fx: 40.0, fy: 40.0, cx: 4.0, cy: 3.0, width: 8, height: 6 };
+    /// let img = DepthImage { camera: cam, depth: &[2.0f32; 48], kind: DepthKind::Planar,
+    ///                        labels: LabelImage::Top1(&[7u8; 48]), stride: 1 };
+    /// let mut map: Map<256, 64, 40> = Map::new(Config::DEFAULT);
+    /// map.integrate_depth(&Isometry3::identity(), &img).unwrap();
+    /// let (mut all, mut dist) = ([0u8; 48], [0f32; 48]);
+    /// map.render(&Isometry3::identity(), &cam, &mut all, &mut dist).unwrap();
+    /// let (mut rows, mut dist) = ([0u8; 16], [0f32; 16]);
+    /// map.render_rows(&Isometry3::identity(), &cam, 2, &mut rows, &mut dist).unwrap();
+    /// assert_eq!(rows, all[16..32]);
+    /// ```
+    pub fn render_rows(
+        &self,
+        pose: &Isometry3<f32>,
+        camera: &Pinhole,
+        first_row: u32,
+        labels: &mut [u8],
+        distance: &mut [f32],
+    ) -> Result<(), Error> {
+        camera.pixels().ok_or(Error::InvalidImage)?;
+        let w = camera.width as usize;
+        let n = labels.len();
+        let rows = n.checked_div(w).unwrap_or(0);
+        let fits = (first_row as usize)
+            .checked_add(rows)
+            .is_some_and(|end| end <= camera.height as usize);
+        if !camera.valid() || distance.len() != n || rows * w != n || !fits {
             return Err(Error::InvalidImage);
         }
         validate_pose(pose)?;
-        let t = pose.translation.vector;
-        let rot = pose.rotation.to_rotation_matrix();
-        let origin = Point3::from(t);
-        let (w, h) = (camera.width, camera.height);
-        // The origin is fixed for the whole image: prepared Gaussians and dilated masks stay
-        // valid (about 41 KiB of stack: 512 x 64 B Gaussians, 512 x 16 B masks; host use).
-        let mut s = Scratch::<RENDER_PREPS, RENDER_DILATED>::new();
-        for ty in (0..h).step_by(TILE as usize) {
-            for tx in (0..w).step_by(TILE as usize) {
-                for row in ty..h.min(ty.saturating_add(TILE)) {
-                    for col in tx..w.min(tx.saturating_add(TILE)) {
-                        let i = row as usize * w as usize + col as usize;
-                        let (Some(l), Some(d)) = (labels.get_mut(i), distance.get_mut(i)) else {
-                            continue;
-                        };
-                        let r = camera.ray(col, row);
-                        let dir = rot * Vector3::new(r[0], r[1], r[2]);
-                        match self.raycast_in(&mut s, &origin, &dir, self.config.max_range) {
-                            Some(hit) => {
-                                *l = hit.class;
-                                *d = hit.t;
-                            }
-                            None => {
-                                *l = INVALID_LABEL;
-                                *d = 0.0;
-                            }
-                        }
-                    }
+        let cfg = &self.config;
+        let r2 = cfg.render_radius * cfg.render_radius;
+        let band = (first_row, first_row + rows as u32);
+        let view = View::new(pose, camera, band, r2, cfg.max_range);
+        labels.fill(INVALID_LABEL);
+        distance.fill(f32::INFINITY);
+        let o = view.origin;
+        // A ray from outside the key range hits nothing (as `raycast` says).
+        if self.voxel_key(&[o.x, o.y, o.z]).is_some() {
+            self.draw_all(&view, labels, distance);
+        }
+        self.resolve(&view, labels, distance);
+        Ok(())
+    }
+
+    /// Draws every occupied surface voxel that may be seen into the z-buffer `distance`.
+    fn draw_all(&self, view: &View, labels: &mut [u8], distance: &mut [f32]) {
+        let cfg = &self.config;
+        let (h, step) = (cfg.cell_size, cfg.quant_step());
+        let fa = floor_abs(h);
+        for bs in self.blocks.live() {
+            let Some(blk) = self.blocks.slots.get(bs) else {
+                continue;
+            };
+            let block = blk.packed_key();
+            for cell in bits(blk.surface) {
+                if blk.cells.get(cell as usize).is_none_or(|&l| l <= 0) {
+                    continue;
+                }
+                let key = VoxelKey::from_block_cell(block, cell);
+                let Some(v) = self
+                    .voxels
+                    .find(key.packed())
+                    .and_then(|vs| self.voxels.slots.get(vs))
+                else {
+                    continue;
+                };
+                if v.n < cfg.n_min {
+                    continue;
+                }
+                let g = v.gaussian(h, step);
+                // Every floored eigenvalue is at most |cov|_F (+ the floor), so the
+                // ellipsoid lies in this ball.
+                let f = g.covariance.norm();
+                let radius = cfg.render_radius * libm::sqrtf(f + (f * cfg.eigen_ratio).max(fa));
+                if view.culls(&g.mean, radius) {
+                    continue;
+                }
+                let class = argmax(&v.hist).map_or(0, |(c, _)| c);
+                let prepared = g.prepare(cfg.eigen_ratio, fa);
+                if let Some(p) = Prep::new(&prepared, class, &view.origin, view.r2) {
+                    draw(view, &p, labels, distance);
                 }
             }
         }
-        Ok(())
+    }
+
+    /// Turns the z-buffer into the output: no hit is (`INVALID_LABEL`, 0); a pixel where
+    /// two Gaussians tied (flagged by a negative distance) is cast by [`Map::raycast`].
+    fn resolve(&self, view: &View, labels: &mut [u8], distance: &mut [f32]) {
+        let w = view.camera.width as usize;
+        let origin = Point3::from(view.origin);
+        for (i, (l, d)) in labels.iter_mut().zip(distance.iter_mut()).enumerate() {
+            if *d == f32::INFINITY {
+                *l = INVALID_LABEL;
+                *d = 0.0;
+            } else if d.is_sign_negative() {
+                let (col, row) = ((i % w) as u32, view.rows.0 + (i / w) as u32);
+                let hit = self.raycast(&origin, &view.ray(col, row), view.max_t);
+                *l = hit.map_or(INVALID_LABEL, |h| h.class);
+                *d = hit.map_or(0.0, |h| h.t);
+            }
+        }
+    }
+}
+
+/// Tests the pixels of `p`'s footprint and keeps the nearer hits. A hit at exactly the
+/// distance already kept flags the pixel (negative distance) for `resolve`: ties
+/// are decided by key, which the z-buffer does not hold.
+fn draw(view: &View, p: &Prep, labels: &mut [u8], distance: &mut [f32]) {
+    let fp = Footprint::new(&p.inv, &p.d, view.r2, &view.t, view.rows, view.camera.width);
+    let w = view.camera.width as usize;
+    for row in fp.rows.0..fp.rows.1 {
+        let base = (row - view.rows.0) as usize * w;
+        for (start, end) in fp.spans(row) {
+            for col in start..end {
+                let Some(u) = view.unit_ray(col, row) else {
+                    continue;
+                };
+                let Some(t) = p.enter(&u, view.r2, view.max_t) else {
+                    continue;
+                };
+                let i = base + col as usize;
+                let (Some(d), Some(l)) = (distance.get_mut(i), labels.get_mut(i)) else {
+                    continue;
+                };
+                let kept = d.abs();
+                if t < kept {
+                    *d = t;
+                    *l = p.class;
+                } else if t == kept {
+                    *d = -t;
+                }
+            }
+        }
     }
 }
 
