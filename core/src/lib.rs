@@ -33,7 +33,7 @@
 //! |---|---|
 //! | `error`, `labels` | [`Error`]; a point's top-k [`Labels`] and [`LabeledPoint`] |
 //! | `key` | [`VoxelKey`], packed table keys and the hash that orders them |
-//! | `crc`, `dda`, `gaussian` | CRC-32; 3-D DDA voxel walk; [`Gaussian`], its prepared inverse with the eigenvalue floor |
+//! | `crc`, `dda`, `sqrt`, `gaussian` | CRC-32; 3-D DDA voxel walk; the square root; [`Gaussian`], its prepared inverse with the eigenvalue floor |
 //! | `config`, `camera` | [`Config`]; [`Pinhole`], depth images, [`depth_point`], pose checks |
 //! | `table` | the fixed-capacity hash table with stable slots |
 //! | `block`, `voxel` | occupancy blocks; surface voxels: sums, decay, histogram |
@@ -75,6 +75,10 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+// The `std` feature only switches the square root to std's (see `sqrt.rs`).
+#[cfg(feature = "std")]
+extern crate std;
+
 // In dependency order (see the table above).
 mod error;
 mod labels;
@@ -84,6 +88,7 @@ mod key;
 mod crc;
 mod dda;
 mod gaussian;
+mod sqrt;
 
 mod camera;
 mod config;

@@ -18,6 +18,7 @@ use crate::dda::Dda;
 use crate::gaussian::Prepared;
 use crate::key::{VoxelKey, KEY_LIMIT};
 use crate::map::Map;
+use crate::sqrt::sqrt;
 use crate::voxel::argmax;
 use nalgebra::{Matrix3, Point3, Vector3};
 
@@ -89,13 +90,49 @@ impl Prep {
         if d2 > r2 {
             return None;
         }
-        let t = t_star - libm::sqrtf((r2 - d2) / a);
+        let t = t_star - sqrt((r2 - d2) / a);
         if !(t >= 0.0 && t <= max_t) {
             return None;
         }
         Some(t)
     }
+
+    /// [`Prep::enter`] for [`LANES`] rays at once (`u[axis][lane]`, NaN for no ray): the
+    /// same operations in the same order, so the same bits, written lane by lane so that
+    /// the compiler can use vector instructions. NaN where a ray does not enter.
+    #[inline(always)]
+    pub(crate) fn enter_lanes(&self, u: &Lanes3, r2: f32, max_t: f32) -> [f32; LANES] {
+        let m = |i: usize, j: usize| self.inv[(i, j)];
+        let (mut t_star, mut q, mut ok) = ([0f32; LANES], [0f32; LANES], [false; LANES]);
+        for l in 0..LANES {
+            let (x, y, z) = (u[0][l], u[1][l], u[2][l]);
+            let w = [0, 1, 2].map(|i| m(i, 0) * x + m(i, 1) * y + m(i, 2) * z);
+            let a = x * w[0] + y * w[1] + z * w[2];
+            let bq = 2.0 * (w[0] * self.d.x + w[1] * self.d.y + w[2] * self.d.z);
+            let ts = -bq / (2.0 * a);
+            let e = [self.d.x + x * ts, self.d.y + y * ts, self.d.z + z * ts];
+            let ie = [0, 1, 2].map(|i| m(i, 0) * e[0] + m(i, 1) * e[1] + m(i, 2) * e[2]);
+            let d2 = e[0] * ie[0] + e[1] * ie[1] + e[2] * ie[2];
+            t_star[l] = ts;
+            q[l] = (r2 - d2) / a;
+            ok[l] = a > 0.0 && (d2 <= r2 || d2.is_nan());
+        }
+        let mut out = [f32::NAN; LANES];
+        for l in 0..LANES {
+            let t = t_star[l] - sqrt(q[l]);
+            if ok[l] && t >= 0.0 && t <= max_t {
+                out[l] = t;
+            }
+        }
+        out
+    }
 }
+
+/// Rays tested together by [`Prep::enter_lanes`].
+pub(crate) const LANES: usize = 8;
+
+/// [`LANES`] vectors by axis: `v[axis][lane]`.
+pub(crate) type Lanes3 = [[f32; LANES]; 3];
 
 /// Caches of one ray: prepared Gaussians and the blocks of the walk.
 struct Scratch {

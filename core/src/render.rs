@@ -19,8 +19,9 @@ use crate::error::Error;
 use crate::gaussian::floor_abs;
 use crate::key::VoxelKey;
 use crate::map::Map;
-use crate::raycast::Prep;
+use crate::raycast::{Lanes3, Prep, LANES};
 use crate::splat::{pixel_to_ray, Footprint};
+use crate::sqrt::sqrt;
 use crate::table::Entry;
 use crate::voxel::argmax;
 use nalgebra::{Isometry3, Point3, Rotation3, Vector3};
@@ -81,13 +82,32 @@ impl View {
             || self.planes.iter().any(|n| n.dot(&mc) < -margin)
     }
 
-    /// The unit ray of pixel `(col, row)`, computed as [`Map::raycast`] gets it from
-    /// [`Map::render`] (so both see the same bits).
+    /// The unit rays of pixels `col..col + LANES` of row `row` (NaN for a ray that has
+    /// none), computed as [`Map::raycast`] gets them from [`View::ray`]: the same bits.
     #[inline(always)]
-    fn unit_ray(&self, col: u32, row: u32) -> Option<Vector3<f32>> {
-        let dir = self.ray(col, row);
-        let n = dir.norm();
-        (n.is_finite() && n > 0.0).then(|| dir / n)
+    fn unit_rays(&self, col: u32, row: u32) -> Lanes3 {
+        let c = &self.camera;
+        let m = self.rot.matrix();
+        let y = (row as f32 + 0.5 - c.cy) / c.fy;
+        let mut u = [[0f32; LANES]; 3];
+        let mut n = [0f32; LANES];
+        for l in 0..LANES {
+            let x = (col.wrapping_add(l as u32) as f32 + 0.5 - c.cx) / c.fx;
+            for (i, ui) in u.iter_mut().enumerate() {
+                ui[l] = m[(i, 0)] * x + m[(i, 1)] * y + m[(i, 2)];
+            }
+            n[l] = u[0][l] * u[0][l] + u[1][l] * u[1][l] + u[2][l] * u[2][l];
+        }
+        for nl in n.iter_mut() {
+            *nl = sqrt(*nl);
+        }
+        for l in 0..LANES {
+            let valid = n[l].is_finite() && n[l] > 0.0;
+            for ui in u.iter_mut() {
+                ui[l] = if valid { ui[l] / n[l] } else { f32::NAN };
+            }
+        }
+        u
     }
 
     #[inline(always)]
@@ -210,7 +230,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 // Every floored eigenvalue is at most |cov|_F (+ the floor), so the
                 // ellipsoid lies in this ball.
                 let f = g.covariance.norm();
-                let radius = cfg.render_radius * libm::sqrtf(f + (f * cfg.eigen_ratio).max(fa));
+                let radius = cfg.render_radius * sqrt(f + (f * cfg.eigen_ratio).max(fa));
                 if view.culls(&g.mean, radius) {
                     continue;
                 }
@@ -251,23 +271,22 @@ fn draw(view: &View, p: &Prep, labels: &mut [u8], distance: &mut [f32]) {
     for row in fp.rows.0..fp.rows.1 {
         let base = (row - view.rows.0) as usize * w;
         for (start, end) in fp.spans(row) {
-            for col in start..end {
-                let Some(u) = view.unit_ray(col, row) else {
-                    continue;
-                };
-                let Some(t) = p.enter(&u, view.r2, view.max_t) else {
-                    continue;
-                };
+            for col in (start..end).step_by(LANES) {
+                let t = p.enter_lanes(&view.unit_rays(col, row), view.r2, view.max_t);
                 let i = base + col as usize;
-                let (Some(d), Some(l)) = (distance.get_mut(i), labels.get_mut(i)) else {
+                let n = ((end - col) as usize).min(LANES);
+                let (Some(ds), Some(ls)) = (distance.get_mut(i..i + n), labels.get_mut(i..i + n))
+                else {
                     continue;
                 };
-                let kept = d.abs();
-                if t < kept {
-                    *d = t;
-                    *l = p.class;
-                } else if t == kept {
-                    *d = -t;
+                for ((d, l), &t) in ds.iter_mut().zip(ls.iter_mut()).zip(t.iter()) {
+                    let kept = d.abs();
+                    if t < kept {
+                        *d = t;
+                        *l = p.class;
+                    } else if t == kept {
+                        *d = -t;
+                    }
                 }
             }
         }

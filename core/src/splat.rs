@@ -69,7 +69,7 @@ impl Footprint {
         let mut fp = Footprint {
             p,
             g,
-            inside: !(c > 0.0),
+            inside: c.is_nan() || c <= 0.0,
             rows,
             width,
         };
@@ -92,7 +92,7 @@ impl Footprint {
         }
         let (adj11, adj12, adj22) = (a * f - c * c, b * c - a * e, a * d - b * b);
         let disc = adj12 * adj12 - adj11 * adj22;
-        if !(disc >= 0.0) {
+        if disc.is_nan() || disc < 0.0 {
             return None;
         }
         let s = libm::sqrt(disc);
@@ -121,7 +121,7 @@ impl Footprint {
                 _ if c >= 0.0 => ((lo, hi), (1.0, 0.0)),
                 _ => return [(0, 0); 2],
             }
-        } else if !(disc >= 0.0) {
+        } else if disc.is_nan() || disc < 0.0 {
             if a < 0.0 {
                 return [(0, 0); 2];
             }
@@ -151,7 +151,7 @@ impl Footprint {
         };
         let clip = |(x0, x1): (f64, f64)| -> Span {
             let (x0, x1) = (x0.max(h0), x1.min(h1));
-            if !(x0 <= x1) {
+            if x0.is_nan() || x1.is_nan() || x0 > x1 {
                 return (0, 0);
             }
             // Columns whose centre `col + 0.5` lies in `[x0, x1]`, one more on each side.
