@@ -381,6 +381,63 @@ mod tests {
         });
     }
 
+    /// Buffers that are not whole rows of the image, or rows beyond its bottom, a broken
+    /// camera or pose: a typed error, never a panic.
+    #[test]
+    fn render_rows_rejects_bad_buffers() {
+        let map: Map<64, 16, 4> = Map::new(Config::DEFAULT);
+        let cam = Pinhole {
+            fx: 10.0,
+            fy: 10.0,
+            cx: 4.0,
+            cy: 3.0,
+            width: 8,
+            height: 6,
+        };
+        let id = Isometry3::identity();
+        let (mut l, mut d) = ([0u8; 48], [0f32; 48]);
+        let bad = Err(Error::InvalidImage);
+        assert_eq!(
+            map.render_rows(&id, &cam, 0, &mut l[..47], &mut d[..47]),
+            bad
+        );
+        assert_eq!(
+            map.render_rows(&id, &cam, 0, &mut l[..16], &mut d[..8]),
+            bad
+        );
+        assert_eq!(
+            map.render_rows(&id, &cam, 5, &mut l[..16], &mut d[..16]),
+            bad
+        );
+        assert_eq!(
+            map.render_rows(&id, &cam, u32::MAX, &mut l[..8], &mut d[..8]),
+            bad
+        );
+        let flat = Pinhole { fx: 0.0, ..cam };
+        assert_eq!(map.render_rows(&id, &flat, 0, &mut l, &mut d), bad);
+        let empty = Pinhole { width: 0, ..cam };
+        assert_eq!(
+            map.render_rows(&id, &empty, 0, &mut l[..0], &mut d[..0]),
+            Ok(())
+        );
+        let mut pose = id;
+        pose.translation.vector.x = f32::NAN;
+        assert_eq!(
+            map.render(&pose, &cam, &mut l, &mut d),
+            Err(Error::InvalidPose)
+        );
+        // The last row alone, and no rows at all, are fine.
+        assert_eq!(
+            map.render_rows(&id, &cam, 5, &mut l[..8], &mut d[..8]),
+            Ok(())
+        );
+        assert_eq!(
+            map.render_rows(&id, &cam, 6, &mut l[..0], &mut d[..0]),
+            Ok(())
+        );
+        assert!(l[..8].iter().all(|&c| c == INVALID_LABEL) && d[..8] == [0.0; 8]);
+    }
+
     /// Regression: `render` passes `config.max_range` as `max_t`; a valid `max_range = 1e9` hits the
     /// same overflow.
     #[test]

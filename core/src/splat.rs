@@ -173,3 +173,93 @@ fn to_pixel(v: f64) -> u32 {
         0
     }
 }
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::camera::Pinhole;
+    use crate::gaussian::{floor_abs, Gaussian};
+    use crate::raycast::Prep;
+    use crate::testutil::Lcg;
+    use nalgebra::{Rotation3, Vector3};
+
+    /// A random rotation from an axis and an angle.
+    fn rotation(rng: &mut Lcg) -> Rotation3<f32> {
+        let axis = Vector3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5);
+        let angle = (rng.next() * 6.3) as f32;
+        Rotation3::from_scaled_axis(axis.map(|v| v as f32).normalize() * angle)
+    }
+
+    /// Every pixel whose ray the exact test accepts lies in the footprint, for ellipsoids
+    /// ahead of, around, behind and enclosing-nearly the camera, thin and round, at radii
+    /// 1, 2.5 and 10; and the footprint is not much larger than what it holds.
+    #[test]
+    fn footprint_holds_every_hit() {
+        let mut rng = Lcg(7);
+        let cam = Pinhole {
+            fx: 40.0,
+            fy: 36.0,
+            cx: 23.0,
+            cy: 19.5,
+            width: 48,
+            height: 36,
+        };
+        let (mut hits, mut tested, mut straddling, mut cases) = (0usize, 0usize, 0, 0);
+        for case in 0..3000 {
+            let rot = rotation(&mut rng);
+            let r = [1.0f32, 2.5, 10.0][case % 3];
+            let r2 = r * r;
+            // Means from 2 cm to 4 m away, in any direction (a third of them behind).
+            let dir = Vector3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.2);
+            let dist = 0.02 + 4.0 * rng.next() * rng.next();
+            let mean = dir.map(|v| v as f32).normalize() * dist as f32;
+            let sigma = [0, 1, 2].map(|_| (0.1 * rng.next().powi(3)) as f32);
+            let shape = rotation(&mut rng).into_inner();
+            let cov = shape
+                * nalgebra::Matrix3::from_diagonal(&sigma.map(|s| s * s).into())
+                * shape.transpose();
+            let g = Gaussian {
+                mean,
+                covariance: cov,
+                count: 10,
+            };
+            let prepared = g.prepare(1e-3, floor_abs(0.1));
+            let Some(p) = Prep::new(&prepared, 1, &Vector3::zeros(), r2) else {
+                continue;
+            };
+            cases += 1;
+            let t = pixel_to_ray(rot.matrix(), [cam.fx, cam.fy, cam.cx, cam.cy]);
+            let fp = Footprint::new(&p.inv, &p.d, r2, &t, (0, cam.height), cam.width);
+            straddling += (fp.rows == (0, cam.height)) as usize;
+            for row in 0..cam.height {
+                let spans = fp.spans(row);
+                let inside = |col: u32| {
+                    (fp.rows.0..fp.rows.1).contains(&row)
+                        && spans.iter().any(|&(s, e)| (s..e).contains(&col))
+                };
+                for col in 0..cam.width {
+                    let ray = cam.ray(col, row);
+                    let d = rot * Vector3::new(ray[0], ray[1], ray[2]);
+                    let hit = p.enter(&(d / d.norm()), r2, 100.0).is_some();
+                    assert!(
+                        !hit || inside(col),
+                        "case {case}: pixel ({col}, {row}) missed"
+                    );
+                    hits += hit as usize;
+                    tested += inside(col) as usize;
+                }
+            }
+        }
+        assert!(
+            cases > 2000 && straddling > 100,
+            "{cases} cases, {straddling} unbounded"
+        );
+        assert!(hits > 100_000, "{hits} hits");
+        // Margins of a pixel and 1% of the radius, and the rows of unbounded footprints.
+        assert!(
+            tested * 4 < hits * 5,
+            "{tested} pixels tested for {hits} hits"
+        );
+    }
+}

@@ -18,9 +18,7 @@
 use crate::dataset::frame::{Frame, LabelSource, Rays};
 use anyhow::{anyhow, Result};
 use rayon::prelude::*;
-use sndt_core::{
-    Config, DepthImage, LabelImage, Labels, Map, Pinhole, Point3, Vector3, INVALID_LABEL,
-};
+use sndt_core::{Config, DepthImage, LabelImage, Labels, Map, Point3, Vector3, INVALID_LABEL};
 
 /// The core map the host evaluates, compares and exports with: 2^19 surface voxels, 2^17
 /// occupancy blocks, the 40 NYU40 classes (~74 MiB), large enough that a trajectory of a
@@ -180,8 +178,8 @@ pub fn integrate_frame<const V: usize, const B: usize, const C: usize>(
 
 /// Back-projects `map` into a frame's camera: one label per pixel (0..=40,
 /// [`INVALID_LABEL`] where nothing is hit). A pinhole frame is rendered by the core's
-/// `render` in row bands of 32 (in parallel; each band is the same camera with its
-/// principal point shifted, which gives exactly the rays of the whole image); a
+/// `render_rows` in bands of rows, two per rayon thread (the pixels do not depend on the
+/// bands, and each band culls the map on its own, so fewer bands waste less); a
 /// per-pixel-ray frame by one `raycast` per pixel along its normalised ray.
 pub fn backproject<const V: usize, const B: usize, const C: usize>(
     map: &Map<V, B, C>,
@@ -189,40 +187,43 @@ pub fn backproject<const V: usize, const B: usize, const C: usize>(
 ) -> Result<Vec<u8>> {
     let (w, h) = (frame.rays.width() as usize, frame.rays.height() as usize);
     let mut labels = vec![INVALID_LABEL; w * h];
-    const BAND: usize = 32;
+    let band = h.div_ceil(2 * rayon::current_num_threads()).max(1);
     labels
-        .par_chunks_mut(BAND * w)
+        .par_chunks_mut(band * w.max(1))
         .enumerate()
-        .try_for_each(|(band, out)| -> Result<()> {
-            let row0 = band * BAND;
-            let rows = out.len() / w;
+        .try_for_each(|(i, out)| -> Result<()> {
+            let row0 = i * band;
             match frame.rays.as_ref() {
                 Rays::Pinhole(cam) => {
-                    let sub = Pinhole {
-                        cy: cam.cy - row0 as f32,
-                        height: rows as u32,
-                        ..*cam
-                    };
                     let mut dist = vec![0f32; out.len()];
-                    map.render(&frame.pose, &sub, out, &mut dist)
+                    map.render_rows(&frame.pose, cam, row0 as u32, out, &mut dist)
                         .map_err(|e| anyhow!("{}: render: {e:?}", frame.id))
                 }
                 Rays::PerPixel { .. } => {
-                    let o = frame.pose.translation.vector;
-                    let origin = Point3::new(o.x, o.y, o.z);
-                    for r in 0..rows {
-                        for c in 0..w {
-                            let ray = frame.rays.ray(c as u32, (row0 + r) as u32);
-                            let d = frame.pose.rotation
-                                * Vector3::new(ray[0], ray[1], ray[2]).normalize();
-                            out[r * w + c] = map
-                                .raycast(&origin, &d, map.config().max_range)
-                                .map_or(INVALID_LABEL, |hit| hit.class);
-                        }
-                    }
+                    raycast_rows(map, frame, row0, out);
                     Ok(())
                 }
             }
         })?;
     Ok(labels)
+}
+
+/// Rows `row0..` of a per-pixel-ray frame, one `raycast` per pixel.
+fn raycast_rows<const V: usize, const B: usize, const C: usize>(
+    map: &Map<V, B, C>,
+    frame: &Frame,
+    row0: usize,
+    out: &mut [u8],
+) {
+    let w = frame.rays.width() as usize;
+    let o = frame.pose.translation.vector;
+    let origin = Point3::new(o.x, o.y, o.z);
+    for (i, px) in out.iter_mut().enumerate() {
+        let (c, r) = ((i % w) as u32, (row0 + i / w) as u32);
+        let ray = frame.rays.ray(c, r);
+        let d = frame.pose.rotation * Vector3::new(ray[0], ray[1], ray[2]).normalize();
+        *px = map
+            .raycast(&origin, &d, map.config().max_range)
+            .map_or(INVALID_LABEL, |hit| hit.class);
+    }
 }
