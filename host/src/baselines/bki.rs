@@ -29,11 +29,11 @@
 //! block's face neighbours; results here must not depend on the spatial index).
 //! Voxels live in hashed blocks of 8^3.
 
+pub use crate::baselines::label_grid::LabelGrid;
 use crate::dataset::frame::{Frame, LabelSource};
 use crate::semantic_map::{LabelView, SemanticMap};
 use anyhow::{bail, Result};
 use nalgebra::{Point3, Vector3};
-use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 use sndt_core::{validate_pose, INVALID_LABEL};
 
@@ -502,7 +502,7 @@ impl BkiMap {
     /// Every voxel's state for `readout` as a dense grid for ray casting.
     pub fn label_grid(&self, readout: Readout) -> LabelGrid {
         let Some(first) = self.blocks.keys().next() else {
-            return LabelGrid::empty(self.config.cell_size);
+            return LabelGrid::new(self.config.cell_size, [0; 3], [0; 3], Vec::new());
         };
         let (mut lo, mut hi) = (*first, *first);
         for k in self.blocks.keys() {
@@ -526,12 +526,7 @@ impl BkiMap {
                 }
             }
         }
-        LabelGrid {
-            cell_size: self.config.cell_size,
-            origin,
-            dims,
-            cells,
-        }
+        LabelGrid::new(self.config.cell_size, origin, dims, cells)
     }
 }
 
@@ -737,135 +732,4 @@ fn free_samples(origin: &[f32; 3], hits: &[Sample], config: BkiConfig) -> Vec<Sa
         }
     }
     frees.samples()
-}
-
-/// A dense grid of read-out labels (class 0..=40 where occupied, [`INVALID_LABEL`] elsewhere)
-/// that renders back-projections: a pixel's ray returns the class of the first occupied
-/// voxel it enters.
-#[derive(Clone, Debug)]
-pub struct LabelGrid {
-    cell_size: f32,
-    origin: [i32; 3],
-    dims: [usize; 3],
-    cells: Vec<u8>,
-}
-
-impl LabelGrid {
-    fn empty(cell_size: f32) -> LabelGrid {
-        LabelGrid {
-            cell_size,
-            origin: [0; 3],
-            dims: [0; 3],
-            cells: Vec::new(),
-        }
-    }
-
-    /// Number of occupied voxels.
-    pub fn occupied(&self) -> usize {
-        self.cells.iter().filter(|&&c| c != INVALID_LABEL).count()
-    }
-
-    /// The class of the first occupied voxel along the ray from `origin` in unit direction
-    /// `dir`, within `max_range` metres.
-    ///
-    /// ```
-    /// use sndt_host::baselines::bki::{BkiConfig, BkiMap, Readout, Sample};
-    /// let mut map = BkiMap::new(BkiConfig::new(0.1, 0.15)).unwrap();
-    /// map.add_sample(&Sample { position: [1.05, 0.05, 0.05], bin: 5 });
-    /// let grid = map.label_grid(Readout::Osbki);
-    /// assert_eq!(grid.cast([0.05, 0.05, 0.05], [1.0, 0.0, 0.0], 20.0), Some(5));
-    /// assert_eq!(grid.cast([0.05, 0.05, 0.05], [-1.0, 0.0, 0.0], 20.0), None);
-    /// ```
-    pub fn cast(&self, origin: [f32; 3], dir: [f32; 3], max_range: f32) -> Option<u8> {
-        if self.cells.is_empty() {
-            return None;
-        }
-        let res = self.cell_size;
-        // Ray in grid units, relative to the grid's corner.
-        let o: [f32; 3] = core::array::from_fn(|a| origin[a] / res - self.origin[a] as f32);
-        let dims = self.dims.map(|d| d as f32);
-        // Clip to the grid box.
-        let (mut t0, mut t1) = (0f32, max_range / res);
-        for a in 0..3 {
-            if dir[a] == 0.0 {
-                if o[a] < 0.0 || o[a] >= dims[a] {
-                    return None;
-                }
-            } else {
-                let (ta, tb) = ((0.0 - o[a]) / dir[a], (dims[a] - o[a]) / dir[a]);
-                t0 = t0.max(ta.min(tb));
-                t1 = t1.min(ta.max(tb));
-            }
-        }
-        if t0 >= t1 || t0.is_nan() || t1.is_nan() {
-            return None;
-        }
-        let start: [f32; 3] = core::array::from_fn(|a| o[a] + dir[a] * t0);
-        let mut v: [i64; 3] =
-            core::array::from_fn(|a| (start[a].floor() as i64).clamp(0, self.dims[a] as i64 - 1));
-        let step: [i64; 3] = dir.map(|d| if d > 0.0 { 1 } else { -1 });
-        let delta: [f32; 3] = dir.map(|d| {
-            if d != 0.0 {
-                1.0 / d.abs()
-            } else {
-                f32::INFINITY
-            }
-        });
-        let mut next: [f32; 3] = core::array::from_fn(|a| {
-            if dir[a] == 0.0 {
-                f32::INFINITY
-            } else {
-                let edge = if dir[a] > 0.0 { v[a] + 1 } else { v[a] } as f32;
-                t0 + (edge - start[a]) / dir[a]
-            }
-        });
-        let (sx, sxy) = (self.dims[0] as i64, (self.dims[0] * self.dims[1]) as i64);
-        let stride = [step[0], step[1] * sx, step[2] * sxy];
-        let mut idx = v[0] + v[1] * sx + v[2] * sxy;
-        loop {
-            let c = self.cells[idx as usize];
-            if c != INVALID_LABEL {
-                return Some(c);
-            }
-            let a = if next[0] < next[1] {
-                if next[0] < next[2] {
-                    0
-                } else {
-                    2
-                }
-            } else if next[1] < next[2] {
-                1
-            } else {
-                2
-            };
-            if next[a] >= t1 {
-                return None;
-            }
-            v[a] += step[a];
-            if v[a] < 0 || v[a] >= self.dims[a] as i64 {
-                return None;
-            }
-            idx += stride[a];
-            next[a] += delta[a];
-        }
-    }
-
-    /// Back-projects the grid into `frame` at its pose: one label per pixel, [`INVALID_LABEL`]
-    /// where the ray meets nothing occupied within `max_range`. Row bands in parallel.
-    pub fn render(&self, frame: &Frame, max_range: f32) -> Vec<u8> {
-        let (w, h) = (frame.rays.width() as usize, frame.rays.height() as usize);
-        let t = frame.pose.translation.vector;
-        let origin = [t.x, t.y, t.z];
-        let mut out = vec![INVALID_LABEL; w * h];
-        out.par_chunks_mut(w).enumerate().for_each(|(row, line)| {
-            for (col, px) in line.iter_mut().enumerate() {
-                let r = frame.rays.ray(col as u32, row as u32);
-                let d = (frame.pose.rotation * Vector3::new(r[0], r[1], r[2])).normalize();
-                *px = self
-                    .cast(origin, [d.x, d.y, d.z], max_range)
-                    .unwrap_or(INVALID_LABEL);
-            }
-        });
-        out
-    }
 }

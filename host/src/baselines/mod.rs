@@ -2,5 +2,6 @@
 //! variant OS-BKI, one count map read out two ways.
 
 pub mod bki;
+pub mod label_grid;
 
 pub use bki::{BkiConfig, BkiMap, LabelGrid, Readout};
