@@ -19,7 +19,8 @@
 //! depth image with labels) into the map and returns a [`FrameReport`]; free space comes
 //! from exact 3-D DDA to the frame's unique end voxels, with NDT-OM likelihood-weighted
 //! misses ([`MissModel`]). [`Map::raycast`] returns the first occupied Gaussian a ray
-//! enters; [`Map::render`] renders a label/distance image from a pose. [`Map::write_snapshot`]
+//! enters; [`Map::render`] renders a label/distance image from a pose (the same answer per
+//! pixel, by drawing each visible Gaussian over the pixels it covers). [`Map::write_snapshot`]
 //! and [`Map::read_snapshot`] keep a versioned little-endian image with a CRC-32 in a
 //! caller's buffer.
 //!
@@ -38,13 +39,21 @@
 //! | `table` | the fixed-capacity hash table with stable slots |
 //! | `block`, `voxel` | occupancy blocks; surface voxels: sums, decay, histogram |
 //! | `map`, `votes` | the [`Map`] struct and its queries; vote sampling of the histogram |
-//! | `evict`, `raycast`, `snapshot` | eviction of far entries; [`Map::raycast`]; snapshots |
+//! | `evict`, `raycast`, `snapshot`, `splat` | eviction of far entries; [`Map::raycast`] and the ray-ellipsoid test; snapshots; an ellipsoid's pixel footprint |
 //! | `frame` | the state of one frame being integrated, [`FrameReport`] |
 //! | `accumulate`, `batch`, `sums`, `free_space` | integration phase 1 (points into sums and votes; the scalar path, and batches of 64 points in two vectorisable stages) and phase 3 (rays) |
-//! | `integrate`, `render` | [`Map::integrate`] and [`Map::integrate_depth`] as their steps; [`Map::render`] |
+//! | `integrate`, `render` | [`Map::integrate`] and [`Map::integrate_depth`] as their steps; [`Map::render`] (each visible Gaussian drawn over its footprint) |
 //!
 //! Integer formats, the snapshot layout and eviction are described in more depth in
 //! `docs/ARCHITECTURE.md`.
+//!
+//! ## Features
+//!
+//! Both off by default; neither changes a result.
+//!
+//! - `defmt`: `defmt::Format` for the public types (firmware logging).
+//! - `std`: the square root of the hot loops from std, which the compiler vectorises
+//!   (`libm`'s is scalar); rendering is several times faster on a host with it.
 //!
 //! ## Example
 //!
