@@ -12,6 +12,7 @@ use crate::frame::{accumulator_index, Accumulator, FrameState};
 use crate::key::{axis_key, VoxelKey};
 use crate::labels::Labels;
 use crate::map::Map;
+use crate::sqrt::sqrt;
 use crate::votes::{vote_max, voting_classes};
 use crate::voxel::{packed_offsets, PackedSums, Voxel};
 
@@ -31,7 +32,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         }
         let w = f.to_world(&p);
         if r2 > f.max_range * f.max_range {
-            self.add_truncated(f, &w, libm::sqrtf(r2));
+            self.add_truncated(f, &w, sqrt(r2));
             return;
         }
         let Some((key, q)) = f.quantise(&w) else {

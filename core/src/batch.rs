@@ -17,6 +17,7 @@ use crate::frame::FrameState;
 #[cfg(doc)]
 use crate::key::VoxelKey;
 use crate::labels::{LabeledPoint, Labels};
+use crate::sqrt::sqrt;
 use crate::votes::{vote_hash, voting_classes};
 use crate::voxel::packed_offsets;
 
@@ -192,7 +193,7 @@ impl Batch {
                 for j in start..end {
                     // Undo the planar scaling: scale = d / |ray| instead of d.
                     let (x, d) = (xs[j - start], self.p[2][j]);
-                    let scale = d / libm::sqrtf(x * x + y * y + 1.0);
+                    let scale = d / sqrt(x * x + y * y + 1.0);
                     self.p[0][j] = x * scale;
                     self.p[1][j] = y * scale;
                     self.p[2][j] = scale;

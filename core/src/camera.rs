@@ -3,6 +3,7 @@
 
 use crate::error::Error;
 use crate::labels::Labels;
+use crate::sqrt::sqrt;
 use nalgebra::{Isometry3, Matrix3, Vector3};
 
 /// Pinhole intrinsics in pixels, OpenCV camera axes (x right, y down, z forward). Pixel
@@ -127,7 +128,7 @@ pub fn depth_point(ray: [f32; 3], depth: f32, kind: DepthKind) -> Option<[f32; 3
     }
     let scale = match kind {
         DepthKind::Planar => depth,
-        DepthKind::Range => depth / libm::sqrtf(ray[0] * ray[0] + ray[1] * ray[1] + 1.0),
+        DepthKind::Range => depth / sqrt(ray[0] * ray[0] + ray[1] * ray[1] + 1.0),
     };
     Some([ray[0] * scale, ray[1] * scale, ray[2] * scale])
 }

@@ -15,6 +15,7 @@ use crate::frame::FrameState;
 use crate::gaussian::{PrepCache, Prepared};
 use crate::key::{VoxelKey, KEY_LIMIT};
 use crate::map::Map;
+use crate::sqrt::sqrt;
 use crate::table::Entry;
 use crate::voxel::Voxel;
 use nalgebra::Vector3;
@@ -38,7 +39,7 @@ impl Segment {
     fn new(f: &FrameState, target: [f32; 3], end: &VoxelKey, include_end: bool) -> Segment {
         let o = f.origin_s;
         let d = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
-        let len_s = libm::sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        let len_s = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
         let ray = Ray {
             origin: f.origin,
             dir: if len_s > 0.0 {

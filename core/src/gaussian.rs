@@ -1,6 +1,7 @@
 //! A voxel's Gaussian: mean and covariance in metres, and its inverse prepared for ray
 //! tests with an eigenvalue floor (so flat and degenerate voxels stay invertible).
 
+use crate::sqrt::sqrt;
 use nalgebra::{Matrix3, Vector3};
 
 /// A voxel's normal distribution in world coordinates (metres).
@@ -94,7 +95,8 @@ pub(crate) fn floor_abs(h: f32) -> f32 {
 }
 
 /// Eigenvalues and eigenvectors (columns) of a symmetric 3x3 matrix by cyclic Jacobi
-/// rotations. Pure arithmetic plus `libm::sqrtf`, so results are bit-identical on every target.
+/// rotations. Pure arithmetic plus a correctly rounded square root, so results are
+/// bit-identical on every target.
 pub(crate) fn symmetric_eigen(m: &Matrix3<f32>) -> ([f32; 3], Matrix3<f32>) {
     let mut a = *m;
     let mut v = Matrix3::<f32>::identity();
@@ -111,8 +113,8 @@ pub(crate) fn symmetric_eigen(m: &Matrix3<f32>) -> ([f32; 3], Matrix3<f32>) {
             }
             let theta = (a[(q, q)] - a[(p, p)]) / (2.0 * apq);
             let sign = if theta >= 0.0 { 1.0 } else { -1.0 };
-            let t = sign / (theta.abs() + libm::sqrtf(theta * theta + 1.0));
-            let c = 1.0 / libm::sqrtf(t * t + 1.0);
+            let t = sign / (theta.abs() + sqrt(theta * theta + 1.0));
+            let c = 1.0 / sqrt(t * t + 1.0);
             let s = t * c;
             // A <- J^T A J with J the rotation in the (p, q) plane.
             for k in 0..3 {
