@@ -146,6 +146,9 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         labels: &mut [u8],
         distance: &mut [f32],
     ) -> Result<(), Error> {
+        if camera.pixels() != Some(labels.len()) {
+            return Err(Error::InvalidImage);
+        }
         self.render_rows(pose, camera, 0, labels, distance)
     }
 
