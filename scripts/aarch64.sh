@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Runs sndt-core's tests (unit, property, doc) and the cross-architecture CRC check
 # (tests/tests/crosscheck.rs) for aarch64-unknown-linux-gnu under qemu-aarch64, and checks
-# that the aarch64 snapshot CRC of the test vector equals the committed one
-# (targets/cortex-m4f/vector/expected_crc.txt), as on x86-64 and the Cortex-M4F firmware.
+# that the aarch64 snapshot CRC of the test vector and the CRC of the view rendered from its
+# map equal the committed ones (targets/cortex-m4f/vector/expected_crc.txt and
+# expected_render_crc.txt), as on x86-64 and the Cortex-M4F firmware.
 # Installs what it needs when missing (idempotent; fast when everything is present).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -59,5 +60,11 @@ if [ "$crc" != "$expected" ]; then
     echo "error: aarch64 snapshot CRC '${crc:-none}' differs from expected_crc.txt ($expected)" >&2
     exit 1
 fi
+expected_render=$(tr -d '[:space:]' <targets/cortex-m4f/vector/expected_render_crc.txt)
+render=$(grep -oE 'crosscheck: aarch64 render crc 0x[0-9a-f]{8}' "$log" | awk '{ print $NF }' | tail -n 1)
+if [ "$render" != "$expected_render" ]; then
+    echo "error: aarch64 render CRC '${render:-none}' differs from expected_render_crc.txt ($expected_render)" >&2
+    exit 1
+fi
 awk '/^test result:/ { p += $4; f += $6 } END { printf "\naarch64: %d passed, %d failed\n", p, f }' "$log"
-echo "aarch64 (qemu-aarch64): snapshot CRC $crc = expected_crc.txt; took $((SECONDS - start)) s"
+echo "aarch64 (qemu-aarch64): snapshot CRC $crc = expected_crc.txt, render CRC $render = expected_render_crc.txt; took $((SECONDS - start)) s"

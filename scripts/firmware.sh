@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Builds the Cortex-M4F firmware (targets/cortex-m4f), prints its flash and static RAM, and
 # runs it under QEMU (mps2-an386) with defmt output decoded by defmt-print. The firmware
-# integrates the committed test vector (targets/cortex-m4f/vector/) and prints its snapshot
-# CRC and peak stack; this script checks that CRC against the host's (`sndt testvector
-# --check`, x86-64) and expected_crc.txt, and that static RAM + peak stack fit the RAM of
-# memory.x. Exits non-zero if anything fails, including the firmware's own checks. Installs
+# integrates the committed test vector (targets/cortex-m4f/vector/), renders a 64x48 view of
+# the map and prints the snapshot CRC, the view's CRC and the peak stack; this script checks
+# both CRCs against the host's (`sndt testvector --check`, x86-64) and expected_crc.txt /
+# expected_render_crc.txt, and that static RAM + peak stack fit the RAM of memory.x. Exits
+# non-zero if anything fails, including the firmware's own checks. Installs
 # what it needs when missing (idempotent; fast when everything is present).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -69,16 +70,26 @@ timeout 60 qemu-system-arm -cpu cortex-m4 -machine mps2-an386 -nographic -monito
     -serial none -semihosting-config enable=on,target=native -icount shift=0 -kernel "$ELF" |
     defmt-print -e "$ELF" | tee "$log"
 
-step "cross-architecture CRC: Cortex-M4F firmware vs host (x86-64) vs expected_crc.txt"
-fw_crc=$(grep -oE 'snapshot crc 0x[0-9a-f]{8}' "$log" | awk '{ print $3 }' | tail -n 1 || true)
-host_crc=$(cargo run -q -p sndt-host --bin sndt -- testvector --check "$VECTOR" | awk '$1 == "crc" { print $2 }')
-expected=$(tr -d '[:space:]' <"$FW_DIR/vector/expected_crc.txt")
-printf 'Cortex-M4F (QEMU): %s\nhost (%s):     %s\nexpected_crc.txt:  %s\n' \
-    "${fw_crc:-none}" "$(uname -m)" "${host_crc:-none}" "$expected"
-if [ -z "$fw_crc" ] || [ "$fw_crc" != "$host_crc" ] || [ "$host_crc" != "$expected" ]; then
-    echo "error: snapshot CRCs differ across architectures" >&2
-    exit 1
-fi
+step "cross-architecture CRCs: Cortex-M4F firmware vs host (x86-64) vs expected_*crc.txt"
+host_log="$(mktemp)"
+trap 'rm -f "$log" "$host_log"' EXIT
+cargo run -q -p sndt-host --bin sndt -- testvector --check "$VECTOR" >"$host_log"
+# check_crc NAME FIRMWARE_TEXT HOST_LINE EXPECTED_FILE: the CRC after FIRMWARE_TEXT in the
+# firmware's output and the host's line "HOST_LINE 0x..." must both equal the committed file.
+check_crc() {
+    local fw host expected
+    fw=$(grep -oE "$2 0x[0-9a-f]{8}" "$log" | awk '{ print $NF }' | tail -n 1 || true)
+    host=$(grep -E "^$3 0x" "$host_log" | awk '{ print $NF }' | tail -n 1 || true)
+    expected=$(tr -d '[:space:]' <"$FW_DIR/vector/$4")
+    printf '%s CRC: Cortex-M4F (QEMU) %s, host (%s) %s, %s %s\n' \
+        "$1" "${fw:-none}" "$(uname -m)" "${host:-none}" "$4" "$expected"
+    if [ -z "$fw" ] || [ "$fw" != "$host" ] || [ "$host" != "$expected" ]; then
+        echo "error: $1 CRCs differ across architectures" >&2
+        return 1
+    fi
+}
+check_crc snapshot 'snapshot crc' 'crc' expected_crc.txt
+check_crc render 'render crc' 'render crc' expected_render_crc.txt
 
 step "memory report"
 peak=$(grep -oE 'peak stack [0-9]+' "$log" | awk '{ print $3 }' | tail -n 1 || true)

@@ -132,6 +132,7 @@ pub use camera::{
     depth_point, pose_from_matrix, validate_pose, DepthImage, DepthKind, LabelImage, Pinhole,
 };
 pub use config::{Config, MissModel, LOGODDS_ONE};
+pub use crc::Crc32;
 pub use error::Error;
 pub use frame::{FrameReport, Phase, MAX_FRAME_POINTS};
 pub use free_space::voxels_on_segment;

@@ -21,7 +21,7 @@
 
 use crate::block::Block;
 use crate::config::{to_fixed, Config, MissModel};
-use crate::crc::{crc32, Crc};
+use crate::crc::{crc32, Crc32};
 use crate::error::Error;
 use crate::key::{join_key, order, split_key, VoxelKey, KEY_LIMIT};
 use crate::map::{Map, MapStats};
@@ -147,7 +147,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// CRC-32 of the map's snapshot, computed without a buffer (the last four bytes
     /// [`Map::write_snapshot`] writes). Equal maps have equal checksums on every target.
     pub fn checksum(&self) -> u32 {
-        let mut crc = Crc::new();
+        let mut crc = Crc32::new();
         let mut chunk = [0u8; 160];
         // Header and records are streamed through a small stack buffer.
         let mut hdr = [0u8; SNAPSHOT_HEADER_BYTES];

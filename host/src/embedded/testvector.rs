@@ -39,6 +39,7 @@
 //! (f32 metres, 0 = no return), then `W H` labels (u8: 0 void, 1..=40 NYU40), row-major.
 //! `W H` is a multiple of 4, so every depth image starts 4-byte aligned.
 
+use crate::embedded::view::{ViewRender, VIEW_HEIGHT, VIEW_WIDTH};
 use anyhow::{bail, ensure, Context, Result};
 use sndt_core::{
     pose_from_matrix, Config, DepthImage, DepthKind, FrameReport, Isometry3, LabelImage, Map,
@@ -231,8 +232,11 @@ fn cast(origin: &[f32; 3], dir: &[f32; 3]) -> Option<(f32, u8)> {
     best
 }
 
-/// Renders one frame: planar depth and labels of every pixel.
-fn render(rotation: &[f32; 9], eye: &[f32; 3], cam: &Pinhole) -> (Vec<f32>, Vec<u8>) {
+/// Renders the scene exactly (ray against box): planar depth (0 = no hit) and label of
+/// every pixel of `cam` from a camera-to-world `rotation` (row-major) at `eye`. This
+/// ground truth is what the vector's frames are, and what a render of the map is checked
+/// against.
+pub fn render_scene(rotation: &[f32; 9], eye: &[f32; 3], cam: &Pinhole) -> (Vec<f32>, Vec<u8>) {
     let n = (cam.width * cam.height) as usize;
     let (mut depth, mut labels) = (vec![0f32; n], vec![0u8; n]);
     for row in 0..cam.height {
@@ -262,7 +266,7 @@ pub fn generate() -> TestVector {
         .iter()
         .map(|(eye, yaw, pitch)| {
             let rotation = rotation(*yaw, *pitch);
-            let (depth, labels) = render(&rotation, eye, &CAMERA);
+            let (depth, labels) = render_scene(&rotation, eye, &CAMERA);
             VectorFrame {
                 rotation,
                 translation: *eye,
@@ -503,6 +507,8 @@ pub struct VectorRun {
     pub probes: Vec<ProbeResult>,
     /// The map's snapshot CRC-32 (`Map::checksum`).
     pub crc: u32,
+    /// The 64 x 48 view from the last frame's pose ([`crate::embedded::view`]).
+    pub view: ViewRender,
 }
 
 /// Integrates the vector into a fresh [`VectorMap`] exactly as the firmware does
@@ -530,6 +536,8 @@ pub fn run(v: &TestVector) -> Result<VectorRun> {
         .iter()
         .map(|&(k, col, row)| probe(&map, v, (k, col, row)))
         .collect::<Result<_>>()?;
+    let last = v.frames.last().context("test vector: no frames")?;
+    let view = ViewRender::new(&map, &v.camera, &last.pose()?)?;
     let stats = map.stats();
     Ok(VectorRun {
         reports,
@@ -538,6 +546,7 @@ pub fn run(v: &TestVector) -> Result<VectorRun> {
         evicted: (stats.voxels_evicted, stats.blocks_evicted),
         probes,
         crc: map.checksum(),
+        view,
     })
 }
 
@@ -578,7 +587,8 @@ pub fn parse_crc(s: &str) -> Result<u32> {
     u32::from_str_radix(hex, 16).with_context(|| format!("CRC {s:?}"))
 }
 
-/// Writes `frames.bin` and `expected_crc.txt` into `dir`; returns the run.
+/// Writes `frames.bin`, `expected_crc.txt` and `expected_render_crc.txt` into `dir`;
+/// returns the run.
 pub fn write(dir: &std::path::Path) -> Result<VectorRun> {
     let v = generate();
     let bytes = v.to_bytes();
@@ -589,11 +599,15 @@ pub fn write(dir: &std::path::Path) -> Result<VectorRun> {
     let txt = dir.join("expected_crc.txt");
     std::fs::write(&txt, format!("{:#010x}\n", run.crc))
         .with_context(|| format!("writing {}", txt.display()))?;
+    let txt = dir.join("expected_render_crc.txt");
+    std::fs::write(&txt, format!("{:#010x}\n", run.view.crc))
+        .with_context(|| format!("writing {}", txt.display()))?;
     Ok(run)
 }
 
 /// A human-readable summary of a run (one line per frame and probe, then the totals and
-/// a final `crc 0x........` line that scripts parse).
+/// the rendered view, its `render crc 0x........` and a final `crc 0x........` line that
+/// scripts parse).
 pub fn summary(v: &TestVector, run: &VectorRun) -> String {
     use std::fmt::Write;
     let mut s = String::new();
@@ -640,6 +654,21 @@ pub fn summary(v: &TestVector, run: &VectorRun) -> String {
         "voxels {}, blocks {}, evictions: voxels {} blocks {}",
         run.voxels, run.blocks, run.evicted.0, run.evicted.1
     );
+    let view = &run.view;
+    let shown: Vec<String> = view
+        .histogram()
+        .iter()
+        .map(|(l, n)| format!("{l}:{n}"))
+        .collect();
+    let _ = writeln!(
+        s,
+        "view {VIEW_WIDTH}x{VIEW_HEIGHT} from frame {}: {} of {} pixels hit; pixels per label {}",
+        run.reports.len().saturating_sub(1),
+        view.hits(),
+        view.labels.len(),
+        shown.join(" ")
+    );
+    let _ = writeln!(s, "render crc {:#010x}", view.crc);
     let _ = writeln!(s, "crc {:#010x}", run.crc);
     s
 }

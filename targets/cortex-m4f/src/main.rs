@@ -2,11 +2,13 @@
 //!
 //! Integrates the committed test vector (`vector/frames.bin`: 4 labelled depth frames of
 //! 160x120 of a synthetic room corner, written by `sndt testvector`) into a
-//! `static` `Map<4096, 512, 40>`, ray casts the vector's probe pixels, and reports over defmt:
-//! per-frame SysTick ticks, voxels, blocks, evictions, the snapshot CRC (which must equal
-//! `vector/expected_crc.txt`, the host's CRC for the same frames), static RAM and the peak
-//! stack (cortex-m-rt `paint-stack`). Exit status 0 (semihosting) only when every check
-//! passes; a panic or HardFault exits non-zero.
+//! `static` `Map<4096, 512, 40>`, ray casts the vector's probe pixels, renders a 64x48 view
+//! of the map from the last frame's pose (in bands of rows, into small stack buffers), and
+//! reports over defmt: per-frame SysTick ticks, voxels, blocks, evictions, the snapshot CRC
+//! (which must equal `vector/expected_crc.txt`, the host's CRC for the same frames), the
+//! view's label histogram and CRC (which must equal `vector/expected_render_crc.txt`), static
+//! RAM and the peak stack (cortex-m-rt `paint-stack`). Exit status 0 (semihosting) only when
+//! every check passes; a panic or HardFault exits non-zero.
 #![no_std]
 #![no_main]
 
@@ -24,8 +26,8 @@ use defmt_rtt as _;
 use defmt_semihosting as _;
 use heapless::Vec;
 use sndt_core::{
-    pose_from_matrix, Config, DepthImage, DepthKind, FrameReport, Isometry3, LabelImage, Map,
-    Matrix3, Phase, Point3, RayHit, Vector3,
+    pose_from_matrix, Config, Crc32, DepthImage, DepthKind, FrameReport, Isometry3, LabelImage,
+    Map, Matrix3, Phase, Pinhole, Point3, RayHit, Vector3, INVALID_LABEL,
 };
 use vector::{Frame, Vector};
 
@@ -44,6 +46,8 @@ struct Aligned<T: ?Sized>(T);
 static VECTOR: &Aligned<[u8]> = &Aligned(*include_bytes!("../vector/frames.bin"));
 /// The host's snapshot CRC for the vector (`sndt testvector`).
 const EXPECTED_CRC: &str = include_str!("../vector/expected_crc.txt");
+/// The host's CRC of the rendered view (`sndt testvector`).
+const EXPECTED_RENDER_CRC: &str = include_str!("../vector/expected_render_crc.txt");
 
 /// Distance tolerance of a probe, metres (as `sndt testvector`).
 const T_TOL: f32 = 0.15;
@@ -104,7 +108,8 @@ fn run(map: &mut FwMap, syst: &mut SYST) -> Result<bool, Abort> {
     let frames_ok = integrate_frames(map, syst, &v)?;
     let probes_ok = check_probes(map, &v)?;
     let map_ok = check_map(map, &v)?;
-    Ok(frames_ok & probes_ok & map_ok)
+    let view_ok = check_view(map, syst, &v)?;
+    Ok(frames_ok & probes_ok & map_ok & view_ok)
 }
 
 /// Parses the vector in flash and installs its cell size in the map.
@@ -350,6 +355,104 @@ fn check_map(map: &FwMap, v: &Vector<'_>) -> Result<bool, Abort> {
         if crc == expected { "ok" } else { "MISMATCH" }
     );
     Ok(crc == expected && stats.frames == v.frames as u32)
+}
+
+/// Size of the rendered view, pixels (as the host's `embedded::view`).
+const VIEW_WIDTH: u32 = 64;
+const VIEW_HEIGHT: u32 = 48;
+/// Rows rendered per `render_rows` call: a band's buffers take 5 bytes per pixel of stack.
+const BAND_ROWS: u32 = 8;
+const BAND_PIXELS: usize = (VIEW_WIDTH * BAND_ROWS) as usize;
+
+/// The view's camera: the vector's scaled to 64x48, principal point at the centre (the
+/// same `f32` operations as the host, so the same bits).
+fn view_camera(c: &Pinhole) -> Pinhole {
+    Pinhole {
+        fx: c.fx * VIEW_WIDTH as f32 / c.width as f32,
+        fy: c.fy * VIEW_HEIGHT as f32 / c.height as f32,
+        cx: VIEW_WIDTH as f32 / 2.0,
+        cy: VIEW_HEIGHT as f32 / 2.0,
+        width: VIEW_WIDTH,
+        height: VIEW_HEIGHT,
+    }
+}
+
+/// What the rendered view shows: pixels per label (index `CLASSES + 1` counts misses) and
+/// the CRC of its pixels (label byte, then the distance's little-endian bytes).
+struct View {
+    pixels_per_label: [u32; CLASSES + 2],
+    crc: u32,
+}
+
+/// Renders the view from the last frame's pose band by band; `None` if a band failed.
+fn render_view(map: &FwMap, pose: &Isometry3<f32>, camera: &Pinhole) -> Option<View> {
+    let mut pixels_per_label = [0u32; CLASSES + 2];
+    let mut crc = Crc32::new();
+    let (mut labels, mut distance) = ([0u8; BAND_PIXELS], [0f32; BAND_PIXELS]);
+    for first_row in (0..VIEW_HEIGHT).step_by(BAND_ROWS as usize) {
+        if let Err(e) = map.render_rows(pose, camera, first_row, &mut labels, &mut distance) {
+            defmt::error!("render_rows from row {=u32}: {}", first_row, e);
+            return None;
+        }
+        for (&l, d) in labels.iter().zip(&distance) {
+            let bin = if l == INVALID_LABEL {
+                CLASSES + 1
+            } else {
+                (l as usize).min(CLASSES)
+            };
+            if let Some(n) = pixels_per_label.get_mut(bin) {
+                *n += 1;
+            }
+            crc.update(&[l]);
+            crc.update(&d.to_le_bytes());
+        }
+    }
+    Some(View {
+        pixels_per_label,
+        crc: crc.finish(),
+    })
+}
+
+/// Renders the view, reports its histogram and time, and checks its CRC against the host's.
+fn check_view(map: &FwMap, syst: &mut SYST, v: &Vector<'_>) -> Result<bool, Abort> {
+    let last = v.frames.checked_sub(1).ok_or(Abort)?;
+    let f = v.frame(last).map_err(|_| Abort)?;
+    let pose = frame_pose(&f).ok_or(Abort)?;
+    let camera = view_camera(&v.camera);
+    let (view, time) = timed(syst, || render_view(map, &pose, &camera));
+    let Some(view) = view else {
+        return Ok(false);
+    };
+    for (label, &n) in view.pixels_per_label.iter().enumerate() {
+        match (n, label) {
+            (0, _) => {}
+            (_, l) if l == CLASSES + 1 => defmt::println!("view: no hit {=u32} pixels", n),
+            _ => defmt::println!("view: class {=usize} {=u32} pixels", label, n),
+        }
+    }
+    defmt::println!(
+        "view {=u32}x{=u32} from frame {=usize}: systick {=u32}, dwt cycles {=u32}",
+        VIEW_WIDTH,
+        VIEW_HEIGHT,
+        last,
+        time.ticks.unwrap_or(u32::MAX),
+        time.cycles
+    );
+    let Some(expected) = vector::parse_crc(EXPECTED_RENDER_CRC) else {
+        defmt::error!("vector/expected_render_crc.txt is not 0x........");
+        return Err(Abort);
+    };
+    defmt::println!(
+        "render crc {=u32:#010x} (expected {=u32:#010x}) {=str}",
+        view.crc,
+        expected,
+        if view.crc == expected {
+            "ok"
+        } else {
+            "MISMATCH"
+        }
+    );
+    Ok(view.crc == expected)
 }
 
 /// Reports static RAM and the peak stack, and checks the stack kept some paint.

@@ -6,7 +6,7 @@
 //! cargo run --release -p sndt-host --bin sndt -- testvector --out targets/cortex-m4f/vector
 //! ```
 //!
-//! The format (version 1, little-endian) is specified in `host/src/testvector.rs`: a 56-byte
+//! The format (version 1, little-endian) is specified in `host/src/embedded/testvector.rs`: a 56-byte
 //! header (magic `SNDTVEC\0`, version, frame/probe counts, map capacities, camera, cell
 //! size), 8-byte probe records `(frame, col, row, 0)` and frames of a 3x3 rotation and a
 //! translation (f32), `W H` planar depths (f32) and `W H` labels (u8).
