@@ -318,9 +318,15 @@ type TrajectoryRuns = (
     usize,
 );
 
+/// One map to build on a trajectory: a label source, a cell size and S-NDT (`None`) or a
+/// BKI kernel length (`Some`).
+type Job = (Segmentation, f32, Option<f32>);
+
 /// One trajectory through every configuration: per segmentation, its input labels scored,
 /// then per cell size S-NDT and, per kernel length, one BKI map read out as S-BKI and / or
-/// OS-BKI.
+/// OS-BKI. The maps are independent, so they are built in parallel (rayon): with more
+/// maps than trajectories, no core idles while the last trajectory finishes. Update times
+/// are unaffected: an update makes no rayon call, so no other work is stolen into it.
 fn run_trajectory(
     frames: &[Frame],
     options: &ExperimentOptions,
@@ -328,45 +334,77 @@ fn run_trajectory(
     bki_methods: &[Method],
     progress: &(dyn Fn() + Sync),
 ) -> Result<TrajectoryRuns> {
-    let readouts: Vec<Readout> = bki_methods.iter().map(|&m| bki_readout(m)).collect();
-    let mut runs = Vec::new();
-    let mut inputs = Vec::new();
+    let inputs = sources
+        .iter()
+        .map(|&s| Ok((s, input_confusion(frames, s)?)))
+        .collect::<Result<Vec<_>>>()?;
+    let mut jobs: Vec<Job> = Vec::new();
     for &segmentation in sources {
-        inputs.push((segmentation, input_confusion(frames, segmentation)?));
-        let labels = segmentation.source();
         for &cell in &options.cells {
-            let key = |method, kernel_mm| RunKey {
-                labels: segmentation,
-                method,
-                kernel_mm,
-                cell_mm: mm(cell),
-            };
             if options.methods.contains(&Method::Sndt) {
-                let mut map: Box<HostMap> =
-                    boxed_map(sndt_config(options, cell)).map_err(|e| anyhow!("config: {e:?}"))?;
-                let score = run_map(map.as_mut(), frames, labels, &[()], progress)?;
-                let seconds = score.update_seconds();
-                for confusion in score.confusions {
-                    runs.push((key(Method::Sndt, 0), confusion, seconds, Default::default()));
-                }
+                jobs.push((segmentation, cell, None));
             }
-            for &l in &options.kernels {
-                if readouts.is_empty() {
-                    break;
-                }
-                let mut map = BkiMap::new(bki_config(options, cell, l))?;
-                let score = run_map(&mut map, frames, labels, &readouts, progress)?;
-                let seconds = score.update_seconds();
-                for ((&m, &readout), confusion) in
-                    bki_methods.iter().zip(&readouts).zip(score.confusions)
-                {
-                    let surface = map.surface_states(readout);
-                    runs.push((key(m, mm(l)), confusion, seconds, surface));
-                }
+            if !bki_methods.is_empty() {
+                jobs.extend(
+                    options
+                        .kernels
+                        .iter()
+                        .map(|&l| (segmentation, cell, Some(l))),
+                );
             }
         }
     }
-    Ok((runs, inputs, frames.len()))
+    let runs = jobs
+        .par_iter()
+        .map(|&job| run_job(frames, options, job, bki_methods, progress))
+        .collect::<Result<Vec<_>>>()?;
+    Ok((runs.into_iter().flatten().collect(), inputs, frames.len()))
+}
+
+/// Builds and scores one map of [`run_trajectory`]: one result for S-NDT, one per BKI
+/// read-out.
+fn run_job(
+    frames: &[Frame],
+    options: &ExperimentOptions,
+    (segmentation, cell, kernel): Job,
+    bki_methods: &[Method],
+    progress: &(dyn Fn() + Sync),
+) -> Result<Vec<(RunKey, Confusion, f64, SurfaceStates)>> {
+    let key = |method, kernel_mm| RunKey {
+        labels: segmentation,
+        method,
+        kernel_mm,
+        cell_mm: mm(cell),
+    };
+    let labels = segmentation.source();
+    let Some(l) = kernel else {
+        let mut map: Box<HostMap> =
+            boxed_map(sndt_config(options, cell)).map_err(|e| anyhow!("config: {e:?}"))?;
+        let score = run_map(map.as_mut(), frames, labels, &[()], progress)?;
+        let seconds = score.update_seconds();
+        return Ok(score
+            .confusions
+            .into_iter()
+            .map(|c| (key(Method::Sndt, 0), c, seconds, Default::default()))
+            .collect());
+    };
+    let readouts: Vec<Readout> = bki_methods.iter().map(|&m| bki_readout(m)).collect();
+    let mut map = BkiMap::new(bki_config(options, cell, l))?;
+    let score = run_map(&mut map, frames, labels, &readouts, progress)?;
+    let seconds = score.update_seconds();
+    Ok(bki_methods
+        .iter()
+        .zip(&readouts)
+        .zip(score.confusions)
+        .map(|((&m, &readout), confusion)| {
+            (
+                key(m, mm(l)),
+                confusion,
+                seconds,
+                map.surface_states(readout),
+            )
+        })
+        .collect())
 }
 
 /// One configuration's map through the trajectory ([`map_and_score`], every pixel), one
