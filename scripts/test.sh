@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The whole test suite: formatting, lints, docs, the no_std build for Cortex-M4F, the
 # firmware in QEMU and the core's tests on aarch64 (qemu-aarch64) with one snapshot CRC on
-# all three architectures, and every test (unit, property, integration, doc). Installs
-# what it needs; idempotent.
+# all three architectures, the C API (header drift, C and C++ programs, C firmware in
+# QEMU), and every test (unit, property, integration, doc). Installs what it needs;
+# idempotent.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -29,6 +30,9 @@ step "Cortex-M4F firmware: fmt, clippy, build, size, run in QEMU, CRC vs host, m
 (cd targets/cortex-m4f && cargo fmt --check && cargo clippy --release --locked -- -D warnings &&
     cargo clippy --release --locked --features rtt -- -D warnings)
 bash scripts/firmware.sh
+
+step "C API: header drift, C99 and C++17 programs (same CRCs), bad calls, C firmware in QEMU"
+bash scripts/c.sh
 
 step "aarch64: sndt-core tests (unit, property, doc) and the CRC check under qemu-aarch64"
 bash scripts/aarch64.sh

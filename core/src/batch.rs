@@ -9,7 +9,7 @@
 //! 2. **accumulate** ([`Phase::Accumulate`](crate::Phase::Accumulate), `sums.rs`): integer
 //!    sums per voxel and votes, one voxel lookup per voxel of the batch.
 
-use crate::camera::{DepthImage, DepthKind, LabelImage, PixelRays};
+use crate::camera::{mm_to_metres, Depth, DepthImage, DepthKind, LabelImage, PixelRays};
 use crate::config::Config;
 #[cfg(doc)]
 use crate::frame::Accumulator;
@@ -156,14 +156,9 @@ impl Batch {
         for r in 0..rows.min(BATCH / n.max(1)) {
             let row = row0 + r * stride;
             let first = row * width + col0;
-            let depth = image.depth.get(first..).unwrap_or(&[]);
             let start = self.len.min(BATCH);
             let y = rays.y(row);
-            let end = match (stride, depth.get(..n)) {
-                (1, Some(depth)) if n == TILE_COLS => self.put_full_row(&xs, y, depth, start),
-                (1, _) => self.put_row(&xs[..n], y, depth.iter(), start),
-                _ => self.put_row(&xs[..n], y, depth.iter().step_by(stride), start),
-            };
+            let end = self.put_depth_row(&image.depth, first, stride, (&xs, n), y, start);
             self.len = end;
             let votes = &mut self.vote[start..end];
             match image.labels {
@@ -201,6 +196,46 @@ impl Batch {
             }
         }
         self.from_depth = true;
+    }
+
+    /// Writes the points of one row of a tile: `n` depths at `stride` from index `first`
+    /// on, along the rays `xs` and `y`, from point `start` on; returns the end of the
+    /// points written. Millimetres are converted to metres first, a row at a time.
+    #[inline]
+    fn put_depth_row(
+        &mut self,
+        depth: &Depth<'_>,
+        first: usize,
+        stride: usize,
+        (xs, n): (&[f32; TILE_COLS], usize),
+        y: f32,
+        start: usize,
+    ) -> usize {
+        let n = n.min(TILE_COLS);
+        match depth {
+            Depth::Metres(d) => {
+                let depth = d.get(first..).unwrap_or(&[]);
+                match (stride, depth.get(..n)) {
+                    (1, Some(depth)) if n == TILE_COLS => self.put_full_row(xs, y, depth, start),
+                    (1, _) => self.put_row(&xs[..n], y, depth.iter(), start),
+                    _ => self.put_row(&xs[..n], y, depth.iter().step_by(stride), start),
+                }
+            }
+            Depth::Millimetres(d) => {
+                let src = d.get(first..).unwrap_or(&[]);
+                let mut row = [0f32; TILE_COLS];
+                let mut m = 0;
+                for (r, &v) in row.iter_mut().zip(src.iter().step_by(stride)).take(n) {
+                    *r = mm_to_metres(v);
+                    m += 1;
+                }
+                if m == TILE_COLS {
+                    self.put_full_row(xs, y, &row, start)
+                } else {
+                    self.put_row(&xs[..n], y, row[..m].iter(), start)
+                }
+            }
+        }
     }
 
     /// [`Batch::put_row`] for a whole row of a tile, in fixed-size arrays that compile

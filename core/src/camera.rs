@@ -76,6 +76,66 @@ pub enum LabelImage<'a> {
     TopK(&'a [Labels]),
 }
 
+/// The depth values of an image, row-major.
+///
+/// ```
+/// use sndt_core::Depth;
+/// let (m, mm) = ([1.5f32, 0.0], [1500u16, 0]);
+/// assert_eq!(Depth::Metres(&m).len(), 2);
+/// assert_eq!(Depth::Millimetres(&mm).metres(0), Some(1.5));
+/// assert_eq!(Depth::Millimetres(&mm).metres(2), None); // past the end
+/// ```
+#[derive(Clone, Copy, Debug)]
+pub enum Depth<'a> {
+    /// Metres; 0, negative, NaN or inf = no return.
+    Metres(&'a [f32]),
+    /// Millimetres as most depth cameras give them (`16UC1`); 0 = no return. A value `v`
+    /// is `v as f32 / 1000.0` metres.
+    Millimetres(&'a [u16]),
+}
+
+impl Depth<'_> {
+    /// Number of depth values.
+    ///
+    /// ```
+    /// assert_eq!(sndt_core::Depth::Millimetres(&[1, 2, 3]).len(), 3);
+    /// ```
+    pub fn len(&self) -> usize {
+        match self {
+            Depth::Metres(d) => d.len(),
+            Depth::Millimetres(d) => d.len(),
+        }
+    }
+
+    /// No depth values at all.
+    ///
+    /// ```
+    /// assert!(sndt_core::Depth::Metres(&[]).is_empty());
+    /// ```
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Value `i` in metres, `None` past the end.
+    ///
+    /// ```
+    /// assert_eq!(sndt_core::Depth::Millimetres(&[2500]).metres(0), Some(2.5));
+    /// ```
+    #[inline]
+    pub fn metres(&self, i: usize) -> Option<f32> {
+        match self {
+            Depth::Metres(d) => d.get(i).copied(),
+            Depth::Millimetres(d) => d.get(i).map(|&v| mm_to_metres(v)),
+        }
+    }
+}
+
+/// Millimetres to metres, the conversion of [`Depth::Millimetres`].
+#[inline]
+pub(crate) fn mm_to_metres(v: u16) -> f32 {
+    v as f32 / 1000.0
+}
+
 /// A depth image with labels, row-major, `width * height` entries each.
 ///
 /// ```
@@ -83,7 +143,7 @@ pub enum LabelImage<'a> {
 /// let cam = Pinhole { fx: 4.0, fy: 4.0, cx: 4.0, cy: 3.0, width: 8, height: 6 };
 /// let depth = [2.0f32; 48];
 /// let labels = [1u8; 48];
-/// let img = DepthImage { camera: cam, depth: &depth, kind: DepthKind::Planar,
+/// let img = DepthImage { camera: cam, depth: Depth::Metres(&depth), kind: DepthKind::Planar,
 ///                        labels: LabelImage::Top1(&labels), stride: 1 };
 /// let mut map: Map<256, 64, 40> = Map::new(Config::DEFAULT);
 /// let r = map.integrate_depth(&Isometry3::identity(), &img).unwrap();
@@ -93,8 +153,8 @@ pub enum LabelImage<'a> {
 pub struct DepthImage<'a> {
     /// Intrinsics and size.
     pub camera: Pinhole,
-    /// Depth in metres; 0, negative, NaN or inf = invalid.
-    pub depth: &'a [f32],
+    /// Depth in metres or millimetres.
+    pub depth: Depth<'a>,
     /// Planar depth or Euclidean range.
     pub kind: DepthKind,
     /// Labels.
@@ -256,7 +316,7 @@ mod tests {
         };
         let img = DepthImage {
             camera: cam,
-            depth: &[],
+            depth: Depth::Metres(&[]),
             kind: DepthKind::Planar,
             labels: LabelImage::None,
             stride: 1,

@@ -4,16 +4,20 @@ use crate::error::Error;
 use crate::labels::MAX_TOP_K;
 
 /// How a voxel traversed by a free-space ray loses occupancy.
+///
+/// `repr(u8)` with `NdtOm = 0`: an all-zero map (as firmware and the C API place it in
+/// zeroed memory) holds a valid `MissModel`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
 pub enum MissModel {
     /// Occupancy-NDT (Saarinen et al.): a voxel with a valid Gaussian gets a miss weighted by
     /// how close the ray passes to its Gaussian, so grazing rays do not erase thin surfaces.
     /// Voxels without a valid Gaussian get [`Config::miss`].
-    NdtOm,
+    NdtOm = 0,
     /// Every traversed voxel gets the constant [`Config::miss`] (classic OctoMap behaviour,
     /// kept to show why NDT-OM misses matter).
-    Constant,
+    Constant = 1,
 }
 
 /// Map configuration. Every field is public; [`Config::DEFAULT`] documents the defaults.

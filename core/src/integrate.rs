@@ -95,7 +95,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// use sndt_core::*;
     /// let cam = Pinhole { fx: 4.0, fy: 4.0, cx: 4.0, cy: 3.0, width: 8, height: 6 };
     /// let depth = [2.0f32; 48];
-    /// let img = DepthImage { camera: cam, depth: &depth, kind: DepthKind::Planar,
+    /// let img = DepthImage { camera: cam, depth: Depth::Metres(&depth), kind: DepthKind::Planar,
     ///                        labels: LabelImage::None, stride: 1 };
     /// let mut map: Map<256, 64, 40> = Map::new(Config::DEFAULT);
     /// let mut batches = 0;
@@ -345,7 +345,8 @@ mod tile_tests {
             for col in (0..cam.width as usize).step_by(s) {
                 let i = row * cam.width as usize + col;
                 let ray = [rays.x(col), rays.y(row), 1.0];
-                let p = depth_point(ray, img.depth[i], img.kind).unwrap_or([f32::NAN; 3]);
+                let d = img.depth.metres(i).unwrap_or(f32::NAN);
+                let p = depth_point(ray, d, img.kind).unwrap_or([f32::NAN; 3]);
                 let labels = match img.labels {
                     LabelImage::None => Labels::NONE,
                     LabelImage::Top1(l) => Labels::top1(l[i]),
@@ -397,7 +398,7 @@ mod tile_tests {
             {
                 let img = DepthImage {
                     camera: cam,
-                    depth: &depth,
+                    depth: Depth::Metres(&depth),
                     kind,
                     labels,
                     stride,
@@ -418,6 +419,60 @@ mod tile_tests {
                     snapshot(&*tiles),
                     snapshot(&*points),
                     "{w}x{h} stride {stride}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn millimetres_map_as_their_metres() {
+        // u16 millimetres (0 = no return, 65535 beyond max range) give the map of the
+        // same depths converted to f32 metres, whatever the tile, stride and kind.
+        let mut rng = Lcg(9);
+        for (w, h, stride) in [(13u32, 11u32, 1u32), (16, 9, 2), (21, 17, 3), (24, 16, 1)] {
+            let n = (w * h) as usize;
+            let mm: Vec<u16> = (0..n)
+                .map(|i| match i % 23 {
+                    5 => 0,
+                    9 => u16::MAX,
+                    _ => 800 + (rng.next() * 1500.0) as u16,
+                })
+                .collect();
+            let metres: Vec<f32> = mm.iter().map(|&v| v as f32 / 1000.0).collect();
+            let labels: Vec<u8> = (0..n).map(|i| 1 + (i % 5) as u8).collect();
+            let camera = Pinhole {
+                fx: 9.0,
+                fy: 8.0,
+                cx: w as f32 / 2.0,
+                cy: h as f32 / 2.0,
+                width: w,
+                height: h,
+            };
+            for kind in [DepthKind::Planar, DepthKind::Range] {
+                let image = |depth| DepthImage {
+                    camera,
+                    depth,
+                    kind,
+                    labels: LabelImage::Top1(&labels),
+                    stride,
+                };
+                let mut cfg = Config::DEFAULT;
+                cfg.max_range = 3.0;
+                let pose = at(0.3, -0.2, 0.1);
+                let mut a: std::boxed::Box<Map<2048, 512, 5>> = std::boxed::Box::new(Map::new(cfg));
+                let mut b: std::boxed::Box<Map<2048, 512, 5>> = std::boxed::Box::new(Map::new(cfg));
+                let ra = a
+                    .integrate_depth(&pose, &image(Depth::Millimetres(&mm)))
+                    .unwrap();
+                let rb = b
+                    .integrate_depth(&pose, &image(Depth::Metres(&metres)))
+                    .unwrap();
+                assert_eq!(ra, rb, "{w}x{h} stride {stride} {kind:?}");
+                assert!(ra.points_used > 0 && ra.rejected_depth > 0 && ra.truncated > 0);
+                assert_eq!(
+                    snapshot(&*a),
+                    snapshot(&*b),
+                    "{w}x{h} stride {stride} {kind:?}"
                 );
             }
         }

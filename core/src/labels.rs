@@ -18,8 +18,11 @@ pub const MAX_TOP_K: usize = 3;
 /// assert_eq!(l.len, 2);
 /// assert_eq!(Labels::top1(3).classes[0], 3);
 /// ```
+///
+/// `repr(C)`, 7 bytes of `u8`: any bytes are a `Labels` (the C API passes arrays of them).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(C)]
 pub struct Labels {
     /// Class ids, best first.
     pub classes: [u8; MAX_TOP_K],
@@ -73,7 +76,11 @@ impl Labels {
 /// let p = LabeledPoint::new(Point3::new(0.0, 0.0, 1.5), Labels::top1(2));
 /// assert_eq!(p.labels.classes[0], 2);
 /// ```
+///
+/// `repr(C)`: the position's three `f32` then the 7 bytes of labels (the C API passes
+/// arrays of them).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub struct LabeledPoint {
     /// Position in the sensor frame, metres.
     pub position: Point3<f32>,

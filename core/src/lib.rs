@@ -129,7 +129,7 @@ mod render;
 mod testutil;
 
 pub use camera::{
-    depth_point, pose_from_matrix, validate_pose, DepthImage, DepthKind, LabelImage, Pinhole,
+    depth_point, pose_from_matrix, validate_pose, Depth, DepthImage, DepthKind, LabelImage, Pinhole,
 };
 pub use config::{Config, MissModel, LOGODDS_ONE};
 pub use crc::Crc32;
@@ -140,7 +140,7 @@ pub use gaussian::Gaussian;
 pub use key::{VoxelKey, KEY_LIMIT};
 pub use labels::{LabeledPoint, Labels, MAX_TOP_K};
 pub use map::{Map, MapStats, Occupancy, VoxelView, BLOCK_BYTES, MAP_HEADER_BYTES};
-pub use nalgebra::{Isometry3, Matrix3, Point3, Translation3, UnitQuaternion, Vector3};
+pub use nalgebra::{Isometry3, Matrix3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
 pub use raycast::RayHit;
 pub use render::INVALID_LABEL;
 pub use snapshot::{SNAPSHOT_BLOCK_BYTES, SNAPSHOT_HEADER_BYTES, SNAPSHOT_VERSION};

@@ -615,7 +615,7 @@ pub(crate) mod tests {
             let (depth, labels) = room_frame(&pose, &CAM);
             let img = DepthImage {
                 camera: CAM,
-                depth: &depth,
+                depth: Depth::Metres(&depth),
                 kind: DepthKind::Planar,
                 labels: LabelImage::Top1(&labels),
                 stride: 1,

@@ -130,7 +130,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// let cam = Pinhole { fx: 40.0, fy: 40.0, cx: 4.0, cy: 3.0, width: 8, height: 6 };
     /// let depth = [2.0f32; 48];
     /// let labels = [7u8; 48];
-    /// let img = DepthImage { camera: cam, depth: &depth, kind: DepthKind::Planar,
+    /// let img = DepthImage { camera: cam, depth: Depth::Metres(&depth), kind: DepthKind::Planar,
     ///                        labels: LabelImage::Top1(&labels), stride: 1 };
     /// let mut map: Map<256, 64, 40> = Map::new(Config::DEFAULT);
     /// map.integrate_depth(&Isometry3::identity(), &img).unwrap();
@@ -160,7 +160,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// ```
     /// use sndt_core::*;
     /// let cam = Pinhole { fx: 40.0, fy: 40.0, cx: 4.0, cy: 3.0, width: 8, height: 6 };
-    /// let img = DepthImage { camera: cam, depth: &[2.0f32; 48], kind: DepthKind::Planar,
+    /// let img = DepthImage { camera: cam, depth: Depth::Metres(&[2.0f32; 48]), kind: DepthKind::Planar,
     ///                        labels: LabelImage::Top1(&[7u8; 48]), stride: 1 };
     /// let mut map: Map<256, 64, 40> = Map::new(Config::DEFAULT);
     /// map.integrate_depth(&Isometry3::identity(), &img).unwrap();

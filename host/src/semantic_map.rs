@@ -18,7 +18,9 @@
 use crate::dataset::frame::{Frame, LabelSource, Rays};
 use anyhow::{anyhow, Result};
 use rayon::prelude::*;
-use sndt_core::{Config, DepthImage, LabelImage, Labels, Map, Point3, Vector3, INVALID_LABEL};
+use sndt_core::{
+    Config, Depth, DepthImage, LabelImage, Labels, Map, Point3, Vector3, INVALID_LABEL,
+};
 
 /// The core map the host evaluates, compares and exports with: 2^19 surface voxels, 2^17
 /// occupancy blocks, the 40 NYU40 classes (~74 MiB), large enough that a trajectory of a
@@ -162,7 +164,7 @@ pub fn integrate_frame<const V: usize, const B: usize, const C: usize>(
             };
             let image = DepthImage {
                 camera: *cam,
-                depth: &frame.depth,
+                depth: Depth::Metres(&frame.depth),
                 kind: frame.depth_kind,
                 labels,
                 stride,

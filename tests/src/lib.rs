@@ -169,7 +169,7 @@ pub fn camera(width: u32, height: u32) -> Pinhole {
 pub fn depth_image<'a>(cam: Pinhole, depth: &'a [f32], labels: &'a [u8]) -> DepthImage<'a> {
     DepthImage {
         camera: cam,
-        depth,
+        depth: sndt_core::Depth::Metres(depth),
         kind: DepthKind::Planar,
         labels: LabelImage::Top1(labels),
         stride: 1,

@@ -232,7 +232,7 @@ proptest! {
             };
             let d = DepthImage {
                 camera: img.camera,
-                depth: &img.depth,
+                depth: sndt_core::Depth::Metres(&img.depth),
                 kind: if img.kind % 2 == 0 { DepthKind::Planar } else { DepthKind::Range },
                 labels,
                 stride: img.stride,

@@ -1,6 +1,6 @@
 //! What the update benches share: a frame as the core's depth image, and one timed pass.
 
-use sndt_core::{DepthImage, LabelImage};
+use sndt_core::{Depth, DepthImage, LabelImage};
 use sndt_host::dataset::frame::{Frame, Rays};
 use sndt_host::semantic_map::HostMap;
 use std::time::Instant;
@@ -12,7 +12,7 @@ pub fn image(frame: &Frame) -> DepthImage<'_> {
     };
     DepthImage {
         camera: *camera,
-        depth: &frame.depth,
+        depth: Depth::Metres(&frame.depth),
         kind: frame.depth_kind,
         labels: LabelImage::Top1(frame.labels.as_deref().expect("ground-truth labels")),
         stride: 1,

@@ -42,8 +42,8 @@
 use crate::embedded::view::{ViewRender, VIEW_HEIGHT, VIEW_WIDTH};
 use anyhow::{bail, ensure, Context, Result};
 use sndt_core::{
-    pose_from_matrix, Config, DepthImage, DepthKind, FrameReport, Isometry3, LabelImage, Map,
-    Matrix3, Pinhole, Point3, Vector3,
+    pose_from_matrix, Config, Depth, DepthImage, DepthKind, FrameReport, Isometry3, LabelImage,
+    Map, Matrix3, Pinhole, Point3, Vector3,
 };
 
 /// File magic.
@@ -521,7 +521,7 @@ pub fn run(v: &TestVector) -> Result<VectorRun> {
     for (k, f) in v.frames.iter().enumerate() {
         let image = DepthImage {
             camera: v.camera,
-            depth: &f.depth,
+            depth: Depth::Metres(&f.depth),
             kind: DepthKind::Planar,
             labels: LabelImage::Top1(&f.labels),
             stride: 1,

@@ -178,7 +178,7 @@ fn integrate_frames(map: &mut FwMap, syst: &mut SYST, v: &Vector<'_>) -> Result<
         };
         let image = DepthImage {
             camera: v.camera,
-            depth: f.depth,
+            depth: Depth::Metres(f.depth),
             kind: DepthKind::Planar,
             labels: LabelImage::Top1(f.labels),
             stride: 1,

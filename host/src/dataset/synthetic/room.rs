@@ -197,7 +197,7 @@ pub fn depth_image<'a>(
 ) -> sndt_core::DepthImage<'a> {
     sndt_core::DepthImage {
         camera: *cam,
-        depth,
+        depth: sndt_core::Depth::Metres(depth),
         kind: sndt_core::DepthKind::Planar,
         labels: sndt_core::LabelImage::Top1(labels),
         stride: 1,

@@ -1,0 +1,78 @@
+#!/usr/bin/env bash
+# The C API (targets/c): Rust fmt, clippy and unit tests of sndt-c; the committed header
+# include/sndt.h against a fresh cbindgen generation (drift check); the C99 and C++17 host
+# programs built with CMake (-Wall -Wextra -Werror -pedantic) and run by ctest: the test
+# vector's snapshot and render CRCs from C, the snapshot CRC from C++, and the bad calls from
+# C; then the bare C firmware on Cortex-M4F in QEMU (scripts/c-firmware.sh). Installs what
+# it needs when missing (cmake via apt-get, cbindgen via cargo install); idempotent.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+C_DIR=targets/c
+VECTOR_DIR=targets/cortex-m4f/vector
+CBINDGEN_VERSION=0.29.4
+BUILD="$C_DIR/target/cmake"
+
+step() { printf '\n==> %s\n' "$*"; }
+
+step "C toolchain: cmake, a C and C++ compiler, cbindgen $CBINDGEN_VERSION"
+if ! command -v cmake >/dev/null 2>&1 || ! command -v g++ >/dev/null 2>&1; then
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq
+    apt-get install -y -qq --no-install-recommends cmake make gcc g++
+fi
+if ! rustup target list --installed | grep -qx thumbv7em-none-eabihf; then
+    rustup target add thumbv7em-none-eabihf
+fi
+if ! cbindgen --version 2>/dev/null | grep -qx "cbindgen $CBINDGEN_VERSION"; then
+    cargo install cbindgen --version "$CBINDGEN_VERSION" --locked
+fi
+
+step "sndt-c: fmt, clippy (host and thumbv7em), unit tests"
+(cd "$C_DIR" && cargo fmt --check && cargo clippy --locked --all-targets -- -D warnings &&
+    cargo clippy --locked --release --target thumbv7em-none-eabihf -- -D warnings &&
+    cargo test --locked --quiet)
+
+step "header drift: include/sndt.h against a fresh cbindgen"
+fresh="$(mktemp)"
+trap 'rm -f "$fresh"' EXIT
+(cd "$C_DIR" && cbindgen --quiet --config cbindgen.toml --output "$fresh")
+if ! diff -u "$C_DIR/include/sndt.h" "$fresh"; then
+    echo "error: targets/c/include/sndt.h is stale: regenerate it with" >&2
+    echo "  (cd targets/c && cbindgen --config cbindgen.toml --output include/sndt.h)" >&2
+    exit 1
+fi
+echo "include/sndt.h: up to date"
+
+step "C99 and C++17 host programs (CMake, -Wall -Wextra -Werror -pedantic), ctest"
+cmake -S "$C_DIR" -B "$BUILD" -DSNDT_EXAMPLES=ON -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$BUILD" -j 2
+(cd "$BUILD" && ctest --output-on-failure)
+
+step "the README's C example compiles (C99, -Wall -Wextra -Werror -pedantic)"
+awk '/^## Use from C\/C\+\+/ { s = 1 } s && /^```c$/ { c = 1; next } c && /^```$/ { exit } c' \
+    README.md >"$BUILD/readme_example.c"
+test -s "$BUILD/readme_example.c"
+cc -std=c99 -Wall -Wextra -Werror -pedantic -I"$C_DIR/include" -c "$BUILD/readme_example.c" \
+    -o "$BUILD/readme_example.o"
+echo "README example: compiles"
+
+step "CRCs from C and C++ against the Rust test vector's"
+want=$(tr -d '[:space:]' <"$VECTOR_DIR/expected_crc.txt")
+want_render=$(tr -d '[:space:]' <"$VECTOR_DIR/expected_render_crc.txt")
+c_out=$("$BUILD/vector_crc" "$VECTOR_DIR/frames.bin")
+cpp_out=$("$BUILD/vector_crc_cpp" "$VECTOR_DIR/frames.bin")
+crc_of() { grep -oE "^$1 crc 0x[0-9a-f]{8}" | awk '{ print $3 }'; }
+c_crc=$(crc_of snapshot <<<"$c_out")
+c_render=$(crc_of render <<<"$c_out")
+cpp_crc=$(crc_of snapshot <<<"$cpp_out")
+printf 'snapshot CRC: C %s, C++ %s, expected_crc.txt %s\n' "${c_crc:-none}" "${cpp_crc:-none}" "$want"
+printf 'render CRC:   C %s, expected_render_crc.txt %s\n' "${c_render:-none}" "$want_render"
+if [ "$c_crc" != "$want" ] || [ "$cpp_crc" != "$want" ] || [ "$c_render" != "$want_render" ]; then
+    echo "error: the C API gives other CRCs than the Rust test vector" >&2
+    exit 1
+fi
+
+step "C firmware on Cortex-M4F in QEMU"
+bash scripts/c-firmware.sh
+echo "c api: ok"
