@@ -26,8 +26,8 @@ use defmt_rtt as _;
 use defmt_semihosting as _;
 use heapless::Vec;
 use sndt_core::{
-    pose_from_matrix, Config, Crc32, DepthImage, DepthKind, FrameReport, Isometry3, LabelImage,
-    Map, Matrix3, Phase, Pinhole, Point3, RayHit, Vector3, INVALID_LABEL,
+    pose_from_matrix, Config, Crc32, Depth, DepthImage, DepthKind, FrameReport, Isometry3,
+    LabelImage, Map, Matrix3, Phase, Pinhole, Point3, RayHit, Vector3, INVALID_LABEL,
 };
 use vector::{Frame, Vector};
 
