@@ -25,6 +25,7 @@ pub mod embedded;
 pub mod eval;
 pub mod output;
 pub mod reference;
+pub mod ros;
 pub mod semantic_map;
 
 pub use semantic_map::boxed_map;

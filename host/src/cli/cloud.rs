@@ -31,7 +31,7 @@ pub fn run(a: &CloudArgs) -> Result<()> {
     let options = OpenOptions {
         split: Some(a.split.clone()),
         paper_fy: a.paper_fy,
-        predictions: None,
+        ..Default::default()
     };
     println!("{}", cloud(&a.dataset, &a.frame, &a.out, &options)?);
     Ok(())

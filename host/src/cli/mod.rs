@@ -11,6 +11,7 @@ pub mod compare;
 pub mod demo;
 pub mod experiment;
 pub mod export;
+pub mod info;
 pub mod labels;
 pub mod map;
 pub mod open_args;
@@ -43,8 +44,10 @@ enum Command {
     /// Write frames' sensor origins and world points as a raw binary file (SNDTPTS1), the
     /// input of the OctoMap peer benchmark.
     Points(points::PointsArgs),
-    /// Generate a synthetic labelled split in the prepared layout (no download).
+    /// Generate a synthetic labelled split in the prepared layout and/or as ROS 2 bags.
     Synth(synth::SynthArgs),
+    /// List a ROS 2 bag's (MCAP) topics and what `sndt map` would use of it.
+    Info(info::InfoArgs),
     /// Map every trajectory of a dataset and evaluate the back-projections with the paper's
     /// evaluation protocol (docs/ARCHITECTURE.md).
     Map(map::MapArgs),
@@ -66,6 +69,7 @@ pub fn main() -> Result<()> {
         Command::Cloud(a) => cloud::run(&a),
         Command::Points(a) => points::run(&a),
         Command::Synth(a) => synth::run(&a),
+        Command::Info(a) => info::run(&a),
         Command::Map(a) => map::run(&a),
         Command::Export(a) => export::run(&a),
         Command::Compare(a) => compare::run(&a),

@@ -15,9 +15,14 @@ use std::time::Instant;
 /// Arguments of `sndt synth`.
 #[derive(clap::Args, Clone, Debug)]
 pub struct SynthArgs {
-    /// Output directory (the dataset root).
+    /// Output directory (the dataset root) of the prepared layout.
+    #[arg(long, required_unless_present = "mcap")]
+    pub out: Option<PathBuf>,
+    /// Also (or only) write each trajectory as a ROS 2 bag: this file for one scene,
+    /// `<stem>_<scene>.mcap` beside it for several (16UC1 depth, mono8 labels, camera info,
+    /// /tf and /tf_static).
     #[arg(long)]
-    pub out: PathBuf,
+    pub mcap: Option<PathBuf>,
     /// Number of scenes (kinds cycle: living, bedroom, kitchen, office, bathroom, open plan).
     #[arg(long, default_value_t = 6)]
     pub scenes: usize,
@@ -48,11 +53,17 @@ pub fn run(a: &SynthArgs) -> Result<()> {
         ..SynthOptions::default()
     };
     let split = Synthetic::new(options)?;
-    println!("sndt synth: {} -> {}", split.describe(), a.out.display());
+    if let Some(path) = &a.mcap {
+        write_bags(&split, path)?;
+    }
+    let Some(out) = &a.out else {
+        return Ok(());
+    };
+    println!("sndt synth: {} -> {}", split.describe(), out.display());
     let bar = progress((a.scenes * a.frames) as u64, "synth");
     // Per-frame statistics are summed outside the lock; only the merge is serialised.
     let stats = Mutex::new(LabelStats::default());
-    let frames = write_split(&a.out, &split, &|f| {
+    let frames = write_split(out, &split, &|f| {
         let mut one = LabelStats::default();
         one.add(f);
         stats.lock().expect("no panic while merging").merge(&one);
@@ -62,7 +73,7 @@ pub fn run(a: &SynthArgs) -> Result<()> {
     bar.finish_and_clear();
     println!("{frames} frames in {:.1} s", t.elapsed().as_secs_f64());
     print_class_histogram(&summary.class_pixels);
-    write_previews(&split, &a.out.join("preview"))?;
+    write_previews(&split, &out.join("preview"))?;
     if !a.no_predictions {
         let m = summary.prediction.metrics();
         println!(
@@ -72,6 +83,27 @@ pub fn run(a: &SynthArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Writes each trajectory of `split` as a ROS 2 bag: `path` for one, `<stem>_<scene>.mcap`
+/// for several.
+pub fn write_bags(split: &Synthetic, path: &Path) -> Result<Vec<PathBuf>> {
+    let trajectories = split.trajectories();
+    let mut written = Vec::new();
+    for (name, ids) in &trajectories {
+        let file = if trajectories.len() == 1 {
+            path.to_path_buf()
+        } else {
+            let stem = path
+                .file_stem()
+                .map_or("synthetic".into(), |s| s.to_string_lossy());
+            path.with_file_name(format!("{stem}_{}.mcap", name.replace('/', "_")))
+        };
+        let n = crate::ros::write::write_trajectory(&file, ids.iter().map(|id| split.load(id)))?;
+        println!("wrote {} ({n} frames of {name})", file.display());
+        written.push(file);
+    }
+    Ok(written)
 }
 
 /// Prints each occurring class's share of all pixels, so a split's class balance can be

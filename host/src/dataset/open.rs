@@ -28,10 +28,20 @@ pub fn open_spec(spec: &str, options: &OpenOptions) -> Result<Box<dyn Dataset>> 
     open(Path::new(spec), options)
 }
 
-/// Opens a dataset directory, detecting its layout:
+/// Opens a dataset directory, detecting its layout, or a ROS 2 bag (`*.mcap`):
 /// - a prepared layout has `<root>/<split>.txt` or `<root>/<split>/depth/`;
 /// - raw Hypersim has `<root>/<scene>/_detail/`.
 pub fn open(root: &Path, options: &OpenOptions) -> Result<Box<dyn Dataset>> {
+    if root.extension().is_some_and(|e| e == "mcap") {
+        let bag = crate::ros::bag::Bag::open(root, &options.bag)?;
+        for (stamp, why) in &bag.skipped {
+            eprintln!(
+                "skipped depth image at {:.9} s: {why}",
+                *stamp as f64 * 1e-9
+            );
+        }
+        return Ok(Box::new(bag));
+    }
     if !root.is_dir() {
         bail!("{}: not a directory", root.display());
     }

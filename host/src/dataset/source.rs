@@ -92,4 +92,21 @@ pub struct OpenOptions {
     /// Directory of ESANet `.npy` predictions (`<dir>/<scene>/<cam>/<NNNN>.npy`);
     /// default: `<root>/<split>/esanet` when it exists.
     pub predictions: Option<std::path::PathBuf>,
+    /// How to read a ROS 2 bag (`.mcap`): topics, world frame, sync tolerance.
+    pub bag: BagOptions,
+}
+
+/// How to read a ROS 2 bag (`crate::ros::bag`).
+#[derive(Clone, Debug, Default)]
+pub struct BagOptions {
+    /// Frame the poses are in (default `world`, else the root of the transform tree).
+    pub world_frame: Option<String>,
+    /// Depth topic (default: the image topic with `16UC1` or `32FC1` images).
+    pub depth_topic: Option<String>,
+    /// Labels topic (default: the image topic with `mono8` or `8UC1` images, if any).
+    pub labels_topic: Option<String>,
+    /// Camera-info topic (default: the one whose frame is the depth image's).
+    pub camera_info_topic: Option<String>,
+    /// Largest stamp difference of labels or camera info paired with a depth image, ns.
+    pub sync_tolerance_ns: u64,
 }
