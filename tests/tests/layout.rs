@@ -383,9 +383,10 @@ fn nothing_points_at_documents_outside_the_repository() {
 fn readme_is_short_and_starts_with_the_two_commands() {
     let readme = std::fs::read_to_string(repo().join("README.md")).unwrap();
     let lines: Vec<&str> = readme.lines().collect();
-    // Five minutes of reading: what it is, the commands, the core, embedded and C use, the
-    // figures (230 since the C API got its section; details belong in docs/).
-    assert!(lines.len() <= 230, "README.md has {} lines", lines.len());
+    // Five minutes of reading: what it is, the commands, the core, robot recordings,
+    // embedded and C use, the figures (240 since ROS bags and the C API got their sections;
+    // details belong in docs/).
+    assert!(lines.len() <= 240, "README.md has {} lines", lines.len());
     let block: Vec<&str> = lines
         .iter()
         .skip_while(|l| !l.starts_with("```"))

@@ -1,5 +1,7 @@
 //! `sndt export`: a map's Gaussians as a PLY (points or ellipsoids) for
-//! MeshLab/CloudCompare, from a saved snapshot or from mapping a dataset's first trajectory.
+//! MeshLab/CloudCompare and / or as a ROS 2 bag (MCAP: point cloud and ellipsoid markers)
+//! for Foxglove and RViz, from a saved snapshot or from mapping a dataset's first
+//! trajectory (then, with `--every N`, the bag holds the map as it grows).
 
 use crate::cli::labels::LabelArg;
 use crate::dataset::frame::LabelSource;
@@ -8,6 +10,9 @@ use crate::dataset::source::OpenOptions;
 use crate::eval::evaluate::load_snapshot;
 use crate::output::export::{ellipsoids, write_ellipsoids, write_points};
 use crate::output::progress::progress;
+use crate::ros::export::MapBag;
+use crate::ros::msgs::Time;
+use crate::ros::write::frame_time;
 use crate::semantic_map::{integrate_frame, HostMap};
 use anyhow::Result;
 use sndt_core::Config;
@@ -20,8 +25,18 @@ pub struct ExportArgs {
     /// (directory or `synthetic[:SCENES:FRAMES]`) whose first trajectory is mapped.
     pub input: String,
     /// Output PLY file.
+    #[arg(long, required_unless_present = "mcap")]
+    pub ply: Option<PathBuf>,
+    /// Output ROS 2 bag (MCAP): /sndt/map/points (PointCloud2), /sndt/map/gaussians
+    /// (MarkerArray), /tf_static.
     #[arg(long)]
-    pub ply: PathBuf,
+    pub mcap: Option<PathBuf>,
+    /// With a dataset and --mcap: write the map every N frames, not only at the end.
+    #[arg(long)]
+    pub every: Option<usize>,
+    /// With --mcap: the frame the map frame `sndt_map` is attached to.
+    #[arg(long, default_value = "world")]
+    pub world_frame: String,
     /// Ellipsoid meshes at this many standard deviations instead of points at the means.
     #[arg(long)]
     pub ellipsoids: Option<f32>,
@@ -40,19 +55,40 @@ pub struct ExportArgs {
 /// wrote.
 pub fn run(a: &ExportArgs) -> Result<()> {
     let path = Path::new(&a.input);
-    let map = if path.is_file() {
+    let is_snapshot = path.is_file() && path.extension().is_none_or(|e| e != "mcap");
+    if a.every == Some(0) {
+        anyhow::bail!("--every 0: give a number of frames of at least 1");
+    }
+    let mut bag = match &a.mcap {
+        Some(p) => Some(MapBag::create(p, &a.world_frame, Time::default())?),
+        None => None,
+    };
+    let map = if is_snapshot {
         load_snapshot(path)?
     } else {
-        map_first_trajectory(&a.input, a.cell, a.labels.into())?
+        map_first_trajectory(&a.input, a.cell, a.labels.into(), a.every, bag.as_mut())?
     };
-    let es = ellipsoids(map.as_ref(), a.min_points);
+    if let (Some(b), Some(p)) = (bag, &a.mcap) {
+        let snapshots = b.written;
+        b.finish()?;
+        println!("wrote {}: {snapshots} map snapshots", p.display());
+    }
+    if let Some(ply) = &a.ply {
+        write_ply(ply, map.as_ref(), a)?;
+    }
+    Ok(())
+}
+
+/// Writes the PLY of `map`.
+fn write_ply(ply: &Path, map: &HostMap, a: &ExportArgs) -> Result<()> {
+    let es = ellipsoids(map, a.min_points);
     match a.ellipsoids {
-        Some(s) => write_ellipsoids(&a.ply, &es, s)?,
-        None => write_points(&a.ply, &es)?,
+        Some(s) => write_ellipsoids(ply, &es, s)?,
+        None => write_points(ply, &es)?,
     }
     println!(
         "wrote {}: {} occupied Gaussians of {} voxels ({})",
-        a.ply.display(),
+        ply.display(),
         es.len(),
         map.len(),
         a.ellipsoids
@@ -63,8 +99,16 @@ pub fn run(a: &ExportArgs) -> Result<()> {
     Ok(())
 }
 
-/// Maps the first trajectory of the dataset `spec` at `cell` with `labels`.
-fn map_first_trajectory(spec: &str, cell: f32, labels: LabelSource) -> Result<Box<HostMap>> {
+/// Maps the first trajectory of the dataset `spec` at `cell` with `labels`; with a bag,
+/// writes the map into it every `every` frames (if given) and at the end, stamped with the
+/// frame's recording time (or 10 Hz from 1 s when the dataset has none).
+fn map_first_trajectory(
+    spec: &str,
+    cell: f32,
+    labels: LabelSource,
+    every: Option<usize>,
+    mut bag: Option<&mut MapBag>,
+) -> Result<Box<HostMap>> {
     let dataset = open_spec(spec, &OpenOptions::default())?;
     let trajectories = dataset.trajectories();
     let (name, ids) = trajectories
@@ -73,8 +117,15 @@ fn map_first_trajectory(spec: &str, cell: f32, labels: LabelSource) -> Result<Bo
     let mut map: Box<HostMap> = crate::semantic_map::boxed_map(Config::with_cell_size(cell))
         .map_err(|e| anyhow::anyhow!("config: {e:?}"))?;
     let bar = progress(ids.len() as u64, "map");
-    for id in ids {
+    for (k, id) in ids.iter().enumerate() {
         integrate_frame(map.as_mut(), &dataset.load(id)?, labels, 1)?;
+        let last = k + 1 == ids.len();
+        if let Some(b) = bag.as_deref_mut() {
+            if last || every.is_some_and(|n| (k + 1) % n == 0) {
+                let stamp = dataset.stamp(id).map_or(frame_time(k), Time::from_nanos);
+                b.write(map.as_ref(), stamp)?;
+            }
+        }
         bar.inc(1);
     }
     bar.finish_and_clear();

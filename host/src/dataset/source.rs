@@ -14,6 +14,11 @@ pub trait Dataset: Send + Sync {
     /// Reads one frame.
     fn load(&self, id: &FrameId) -> Result<Frame>;
 
+    /// When the frame was recorded, nanoseconds, if the dataset knows (ROS 2 bags).
+    fn stamp(&self, _id: &FrameId) -> Option<u64> {
+        None
+    }
+
     /// Frames grouped by trajectory (`scene/cam`), in order.
     fn trajectories(&self) -> Vec<(String, Vec<FrameId>)> {
         let mut out: Vec<(String, Vec<FrameId>)> = Vec::new();

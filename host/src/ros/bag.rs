@@ -418,6 +418,10 @@ impl Dataset for Bag {
         &self.ids
     }
 
+    fn stamp(&self, id: &FrameId) -> Option<u64> {
+        self.frames.get(id.index as usize).map(|f| f.stamp)
+    }
+
     fn load(&self, id: &FrameId) -> Result<Frame> {
         let f = self
             .frames

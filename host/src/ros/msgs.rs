@@ -236,6 +236,147 @@ pub struct Odometry {
     pub twist: TwistWithCovariance,
 }
 
+/// `sensor_msgs/msg/PointField`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PointField {
+    /// Field name.
+    pub name: String,
+    /// Byte offset in the point.
+    pub offset: u32,
+    /// 1 INT8, 2 UINT8, 3 INT16, 4 UINT16, 5 INT32, 6 UINT32, 7 FLOAT32, 8 FLOAT64.
+    pub datatype: u8,
+    /// Elements.
+    pub count: u32,
+}
+
+/// `sensor_msgs/msg/PointCloud2`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PointCloud2 {
+    /// Stamp and frame of the points.
+    pub header: Header,
+    /// Rows (1 for an unordered cloud).
+    pub height: u32,
+    /// Points per row.
+    pub width: u32,
+    /// The fields of a point.
+    pub fields: Vec<PointField>,
+    /// Big-endian data.
+    pub is_bigendian: bool,
+    /// Bytes per point.
+    pub point_step: u32,
+    /// Bytes per row.
+    pub row_step: u32,
+    /// The points.
+    #[serde(with = "serde_bytes")]
+    pub data: Vec<u8>,
+    /// No invalid points.
+    pub is_dense: bool,
+}
+
+/// `std_msgs/msg/ColorRGBA`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ColorRgba {
+    /// Red, 0..=1.
+    pub r: f32,
+    /// Green.
+    pub g: f32,
+    /// Blue.
+    pub b: f32,
+    /// Alpha.
+    pub a: f32,
+}
+
+/// `builtin_interfaces/msg/Duration`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Duration {
+    /// Seconds.
+    pub sec: i32,
+    /// Nanoseconds.
+    pub nanosec: u32,
+}
+
+/// `sensor_msgs/msg/CompressedImage`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct CompressedImage {
+    /// Stamp and frame.
+    pub header: Header,
+    /// `jpeg`, `png`, ...
+    pub format: String,
+    /// The compressed bytes.
+    #[serde(with = "serde_bytes")]
+    pub data: Vec<u8>,
+}
+
+/// `visualization_msgs/msg/UVCoordinate`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct UvCoordinate {
+    /// u.
+    pub u: f32,
+    /// v.
+    pub v: f32,
+}
+
+/// `visualization_msgs/msg/MeshFile`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct MeshFile {
+    /// File name.
+    pub filename: String,
+    /// Contents.
+    #[serde(with = "serde_bytes")]
+    pub data: Vec<u8>,
+}
+
+/// `visualization_msgs/msg/Marker` (the ROS 2 Humble and later layout).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Marker {
+    /// Stamp and frame.
+    pub header: Header,
+    /// Namespace.
+    pub ns: String,
+    /// Id within the namespace.
+    pub id: i32,
+    /// 2 SPHERE, ...
+    #[serde(rename = "type")]
+    pub kind: i32,
+    /// 0 ADD, 2 DELETE, 3 DELETEALL.
+    pub action: i32,
+    /// Pose of the shape.
+    pub pose: Pose,
+    /// Size along the shape's axes, metres.
+    pub scale: Vector3,
+    /// Colour.
+    pub color: ColorRgba,
+    /// 0: forever.
+    pub lifetime: Duration,
+    /// Follow the frame.
+    pub frame_locked: bool,
+    /// Points of list shapes.
+    pub points: Vec<Point>,
+    /// Colours of list shapes.
+    pub colors: Vec<ColorRgba>,
+    /// Texture resource.
+    pub texture_resource: String,
+    /// Texture.
+    pub texture: CompressedImage,
+    /// Texture coordinates.
+    pub uv_coordinates: Vec<UvCoordinate>,
+    /// Text of text markers.
+    pub text: String,
+    /// Mesh resource.
+    pub mesh_resource: String,
+    /// Mesh file.
+    pub mesh_file: MeshFile,
+    /// Use the mesh's materials.
+    pub mesh_use_embedded_materials: bool,
+}
+
+/// `visualization_msgs/msg/MarkerArray`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct MarkerArray {
+    /// The markers.
+    pub markers: Vec<Marker>,
+}
+
 /// The `ros2msg` definitions: `(schema name, full text with its dependencies)`.
 pub mod definitions {
     const SEP: &str =
@@ -276,6 +417,53 @@ pub mod definitions {
         "sensor_msgs/RegionOfInterest",
         "uint32 x_offset\nuint32 y_offset\nuint32 height\nuint32 width\nbool do_rectify\n",
     );
+
+    const POINT: (&str, &str) = ("geometry_msgs/Point", "float64 x\nfloat64 y\nfloat64 z\n");
+    const POSE: (&str, &str) = (
+        "geometry_msgs/Pose",
+        "Point position\nQuaternion orientation\n",
+    );
+    const COLOR: (&str, &str) = (
+        "std_msgs/ColorRGBA",
+        "float32 r\nfloat32 g\nfloat32 b\nfloat32 a\n",
+    );
+    const DURATION: (&str, &str) = ("builtin_interfaces/Duration", "int32 sec\nuint32 nanosec\n");
+    const POINT_FIELD: (&str, &str) = (
+        "sensor_msgs/PointField",
+        "uint8 INT8=1\nuint8 UINT8=2\nuint8 INT16=3\nuint8 UINT16=4\nuint8 INT32=5\nuint8 UINT32=6\nuint8 FLOAT32=7\nuint8 FLOAT64=8\nstring name\nuint32 offset\nuint8 datatype\nuint32 count\n",
+    );
+    const MARKER: (&str, &str) = (
+        "visualization_msgs/Marker",
+        "int32 ARROW=0\nint32 CUBE=1\nint32 SPHERE=2\nint32 CYLINDER=3\nint32 LINE_STRIP=4\nint32 LINE_LIST=5\nint32 CUBE_LIST=6\nint32 SPHERE_LIST=7\nint32 POINTS=8\nint32 TEXT_VIEW_FACING=9\nint32 MESH_RESOURCE=10\nint32 TRIANGLE_LIST=11\nint32 ADD=0\nint32 MODIFY=0\nint32 DELETE=2\nint32 DELETEALL=3\nstd_msgs/Header header\nstring ns\nint32 id\nint32 type\nint32 action\ngeometry_msgs/Pose pose\ngeometry_msgs/Vector3 scale\nstd_msgs/ColorRGBA color\nbuiltin_interfaces/Duration lifetime\nbool frame_locked\ngeometry_msgs/Point[] points\nstd_msgs/ColorRGBA[] colors\nstring texture_resource\nsensor_msgs/CompressedImage texture\nUVCoordinate[] uv_coordinates\nstring text\nstring mesh_resource\nMeshFile mesh_file\nbool mesh_use_embedded_materials\n",
+    );
+    const COMPRESSED: (&str, &str) = (
+        "sensor_msgs/CompressedImage",
+        "std_msgs/Header header\nstring format\nuint8[] data\n",
+    );
+    const UV: (&str, &str) = ("visualization_msgs/UVCoordinate", "float32 u\nfloat32 v\n");
+    const MESH_FILE: (&str, &str) = (
+        "visualization_msgs/MeshFile",
+        "string filename\nuint8[] data\n",
+    );
+
+    /// `sensor_msgs/msg/PointCloud2`.
+    pub fn point_cloud2() -> (&'static str, String) {
+        let own = "std_msgs/Header header\nuint32 height\nuint32 width\nPointField[] fields\nbool is_bigendian\nuint32 point_step\nuint32 row_step\nuint8[] data\nbool is_dense\n";
+        (
+            "sensor_msgs/msg/PointCloud2",
+            with_deps(own, &[HEADER, TIME, POINT_FIELD]),
+        )
+    }
+
+    /// `visualization_msgs/msg/MarkerArray`.
+    pub fn marker_array() -> (&'static str, String) {
+        let own = "Marker[] markers\n";
+        let deps = [
+            MARKER, HEADER, TIME, POSE, POINT, QUATERNION, VECTOR3, COLOR, DURATION, COMPRESSED,
+            UV, MESH_FILE,
+        ];
+        ("visualization_msgs/msg/MarkerArray", with_deps(own, &deps))
+    }
 
     /// `sensor_msgs/msg/Image`.
     pub fn image() -> (&'static str, String) {
