@@ -188,3 +188,205 @@ fn bad_bags_say_what_and_where_and_keep_the_usable_frames() {
     assert!(e.contains("MCAP"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Writes the frames of `s` as a bag posed by a pose topic (`odometry`: an Odometry of
+/// `base_link` plus /tf_static to the camera; else a PoseStamped of the camera), labels
+/// shifted by 100 (to be mapped back), stamps in reverse order in the file, a declared but
+/// empty topic, and returns the path.
+fn posed_bag(dir: &std::path::Path, s: &Synthetic, odometry: bool) -> PathBuf {
+    use sndt_host::ros::msgs::Pose;
+    let path = dir.join(if odometry { "odom.mcap" } else { "pose.mcap" });
+    let mut bag = BagWriter::create(&path).unwrap();
+    bag.add_topic(names::DEPTH, msgs::definitions::image())
+        .unwrap();
+    bag.add_topic(names::LABELS, msgs::definitions::image())
+        .unwrap();
+    bag.add_topic("/empty", msgs::definitions::image()).unwrap();
+    bag.add_topic(names::CAMERA_INFO, msgs::definitions::camera_info())
+        .unwrap();
+    let pose_def = if odometry {
+        msgs::definitions::odometry()
+    } else {
+        msgs::definitions::pose_stamped()
+    };
+    bag.add_topic("/pose", pose_def).unwrap();
+    bag.add_topic("/tf_static", msgs::definitions::tf_message())
+        .unwrap();
+    let fixed = TransformStamped {
+        header: Header {
+            stamp: frame_time(0),
+            frame_id: names::BASE.into(),
+        },
+        child_frame_id: names::CAMERA.into(),
+        transform: Default::default(),
+    };
+    bag.write(
+        "/tf_static",
+        frame_time(0),
+        &TfMessage {
+            transforms: vec![fixed],
+        },
+    )
+    .unwrap();
+    let ids = s.frames().to_vec();
+    for (k, id) in ids.iter().enumerate().rev() {
+        let f = s.load(id).unwrap();
+        let sndt_host::dataset::frame::Rays::Pinhole(cam) = *f.rays else {
+            unreachable!()
+        };
+        let stamp = frame_time(k);
+        let header = Header {
+            stamp,
+            frame_id: names::CAMERA.into(),
+        };
+        let t = camera_transform(&f.pose);
+        let pose = Pose {
+            position: msgs::Point {
+                x: t.translation.x,
+                y: t.translation.y,
+                z: t.translation.z,
+            },
+            orientation: t.rotation,
+        };
+        write_pose(&mut bag, stamp, pose, odometry);
+        bag.write(
+            names::CAMERA_INFO,
+            stamp,
+            &camera_info(header.clone(), &cam),
+        )
+        .unwrap();
+        write_images(&mut bag, &header, &cam, &f);
+    }
+    bag.finish().unwrap();
+    path
+}
+
+/// `pose` on `/pose`: an Odometry of `base_link` or a PoseStamped, both in the world.
+fn write_pose(bag: &mut BagWriter, stamp: msgs::Time, pose: msgs::Pose, odometry: bool) {
+    use sndt_host::ros::msgs::{
+        Odometry, PoseStamped, PoseWithCovariance, Twist, TwistWithCovariance,
+    };
+    let world = Header {
+        stamp,
+        frame_id: names::WORLD.into(),
+    };
+    if odometry {
+        let odom = Odometry {
+            header: world,
+            child_frame_id: names::BASE.into(),
+            pose: PoseWithCovariance {
+                pose,
+                covariance: [[0.0; 6]; 6],
+            },
+            twist: TwistWithCovariance {
+                twist: Twist::default(),
+                covariance: [[0.0; 6]; 6],
+            },
+        };
+        bag.write("/pose", stamp, &odom).unwrap();
+    } else {
+        bag.write(
+            "/pose",
+            stamp,
+            &PoseStamped {
+                header: world,
+                pose,
+            },
+        )
+        .unwrap();
+    }
+}
+
+/// The frame's depth (16UC1, the prepared layout's millimetres) and its labels + 100.
+fn write_images(
+    bag: &mut BagWriter,
+    header: &Header,
+    cam: &sndt_core::Pinhole,
+    f: &sndt_host::dataset::frame::Frame,
+) {
+    let mm: Vec<u8> = f
+        .depth
+        .iter()
+        .flat_map(|&d| sndt_host::dataset::prepared::depth_to_mm(d).to_le_bytes())
+        .collect();
+    let image = |encoding: &str, step: u32, data: Vec<u8>| Image {
+        header: header.clone(),
+        height: cam.height,
+        width: cam.width,
+        encoding: encoding.into(),
+        is_bigendian: 0,
+        step,
+        data,
+    };
+    let stamp = header.stamp;
+    bag.write(names::DEPTH, stamp, &image("16UC1", cam.width * 2, mm))
+        .unwrap();
+    let shifted: Vec<u8> = f
+        .labels
+        .as_ref()
+        .unwrap()
+        .iter()
+        .map(|&l| l + 100)
+        .collect();
+    bag.write(names::LABELS, stamp, &image("mono8", cam.width, shifted))
+        .unwrap();
+}
+
+#[test]
+fn pose_topics_label_maps_and_unordered_stamps_give_the_same_frames() {
+    let dir = temp("posed");
+    let s = split(3);
+    write_split(&dir, &s, &|_| {}).unwrap();
+    let prepared = open(&dir, &OpenOptions::default()).unwrap();
+    let label_map: Vec<(u8, u8)> = (0..=40).map(|c| (c + 100, c)).collect();
+    for odometry in [false, true] {
+        let path = posed_bag(&dir, &s, odometry);
+        let o = BagOptions {
+            pose_topic: Some("/pose".into()),
+            label_map: label_map.clone(),
+            ..BagOptions::default()
+        };
+        let bag = Bag::open(&path, &o).unwrap();
+        assert_eq!(bag.frames().len(), 3, "{:?}", bag.skipped);
+        for (a, b) in prepared.frames().iter().zip(bag.frames()) {
+            let (a, b) = (prepared.load(a).unwrap(), bag.load(b).unwrap());
+            assert_eq!(a.pose, b.pose, "odometry {odometry}");
+            assert_eq!(a.labels, b.labels);
+            assert_eq!(a.depth, b.depth);
+        }
+        // Without the label map the ids are out of the NYU40 range: mapping counts them
+        // as rejected labels rather than failing.
+        let raw = Bag::open(
+            &path,
+            &BagOptions {
+                pose_topic: Some("/pose".into()),
+                ..BagOptions::default()
+            },
+        )
+        .unwrap();
+        assert!(raw
+            .load(&raw.frames()[0])
+            .unwrap()
+            .labels
+            .unwrap()
+            .iter()
+            .all(|&l| l >= 100));
+    }
+    // A declared topic without messages: named, it is an error that says so.
+    let path = dir.join("pose.mcap");
+    let o = BagOptions {
+        labels_topic: Some("/empty".into()),
+        ..BagOptions::default()
+    };
+    let e = format!("{:#}", Bag::open(&path, &o).err().unwrap());
+    assert!(e.contains("/empty") && e.contains("no messages"), "{e}");
+    // Without a pose topic and without /tf, every frame is skipped for lack of a transform.
+    let bag = Bag::open(&path, &BagOptions::default()).unwrap();
+    assert_eq!((bag.frames().len(), bag.skipped.len()), (0, 3));
+    assert!(
+        bag.skipped[0].1.contains("no transform"),
+        "{:?}",
+        bag.skipped[0]
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

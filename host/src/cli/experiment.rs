@@ -114,7 +114,7 @@ impl ExperimentArgs {
 /// Runs `sndt experiment`: runs every method, label source, cell size and kernel length,
 /// prints the tables and writes them with the charts into `--out`.
 pub fn run(a: &ExperimentArgs) -> Result<()> {
-    let mut dataset = open_spec(&a.dataset, &a.open.options())?;
+    let mut dataset = open_spec(&a.dataset, &a.open.options()?)?;
     if a.every > 1 {
         dataset = Box::new(Every::new(dataset, a.every));
     }

@@ -19,7 +19,7 @@ pub struct InfoArgs {
 
 /// Runs `sndt info`.
 pub fn run(a: &InfoArgs) -> Result<()> {
-    let bag = Bag::open(&a.bag, &a.open.options().bag)?;
+    let bag = Bag::open(&a.bag, &a.open.options()?.bag)?;
     print!("{}", info(&bag));
     Ok(())
 }

@@ -44,7 +44,7 @@ pub struct MapArgs {
 /// and the metrics table, and writes metrics.md and metrics.json beside the pictures.
 pub fn run(a: &MapArgs) -> Result<()> {
     let labels = LabelSource::from(a.labels);
-    let dataset = open_spec(&a.dataset, &a.open.options())?;
+    let dataset = open_spec(&a.dataset, &a.open.options()?)?;
     println!("sndt map: {}", dataset.describe());
     let frames = dataset.frames().len();
     let bar = progress(2 * frames as u64, "map+eval");

@@ -32,7 +32,7 @@ pub struct PointsArgs {
 
 /// Runs `sndt points` and prints what it wrote.
 pub fn run(a: &PointsArgs) -> Result<()> {
-    let data = open_spec(&a.dataset, &a.open.options())?;
+    let data = open_spec(&a.dataset, &a.open.options()?)?;
     let all = data.frames();
     let ids = &all[..a.frames.unwrap_or(all.len()).min(all.len())];
     println!("{}", write_points(data.as_ref(), ids, &a.out)?);

@@ -104,8 +104,15 @@ pub struct OpenOptions {
 /// How to read a ROS 2 bag (`crate::ros::bag`).
 #[derive(Clone, Debug, Default)]
 pub struct BagOptions {
-    /// Frame the poses are in (default `world`, else the root of the transform tree).
+    /// Frame the poses are in (default `world`).
     pub world_frame: Option<String>,
+    /// A `geometry_msgs/msg/PoseStamped` (the depth camera's pose) or `nav_msgs/msg/Odometry`
+    /// (the pose of its `child_frame_id`, chained to the camera by `/tf_static`) topic; its
+    /// poses replace the `/tf` and `/tf_static` transforms of the frame they pose.
+    pub pose_topic: Option<String>,
+    /// Label ids of the bag to NYU40 classes: `(id, class)`; ids not listed become void.
+    /// Empty: labels are NYU40 already.
+    pub label_map: Vec<(u8, u8)>,
     /// Depth topic (default: the image topic with `16UC1` or `32FC1` images).
     pub depth_topic: Option<String>,
     /// Labels topic (default: the image topic with `mono8` or `8UC1` images, if any).

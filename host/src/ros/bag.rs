@@ -3,7 +3,9 @@
 //! posed by the transform chain from the camera's frame to the world frame at the stamp.
 //! Topics are found by message type unless named.
 
-use super::msgs::{CameraInfo, Image, TfMessage};
+use super::msgs::{
+    CameraInfo, Image, Odometry, PoseStamped, TfMessage, Transform, TransformStamped, Vector3,
+};
 use super::tf::{to_pose, TfBuffer};
 use crate::dataset::frame::{Frame, FrameId, Rays};
 pub use crate::dataset::source::BagOptions;
@@ -18,6 +20,8 @@ use std::sync::Arc;
 const IMAGE: &str = "sensor_msgs/msg/Image";
 const CAMERA_INFO: &str = "sensor_msgs/msg/CameraInfo";
 const TF: &str = "tf2_msgs/msg/TFMessage";
+const POSE_STAMPED: &str = "geometry_msgs/msg/PoseStamped";
+const ODOMETRY: &str = "nav_msgs/msg/Odometry";
 
 /// One topic of a bag.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -118,7 +122,7 @@ fn pick(
 ) -> Result<Option<String>> {
     if let Some(name) = named {
         let Some(info) = topics.get(name) else {
-            bail!("{what} topic {name} is not in the bag");
+            bail!("{what} topic {name} has no messages in the bag");
         };
         if info.schema != IMAGE {
             bail!(
@@ -154,50 +158,24 @@ impl Bag {
         let depth_topic = pick(&topics, &o.depth_topic, &["16UC1", "32FC1"], "depth")?
             .ok_or_else(|| anyhow!("{}: no depth images (16UC1 or 32FC1)", path.display()))?;
         let labels_topic = pick(&topics, &o.labels_topic, &["mono8", "8UC1"], "labels")?;
-        let mut tf = TfBuffer::default();
-        let mut infos: BTreeMap<String, Vec<(u64, CameraInfo)>> = BTreeMap::new();
-        let (mut depths, mut labels) = (Vec::new(), BTreeMap::new());
-        for (topic, schema, t, data) in &msgs {
-            match schema.as_str() {
-                TF => {
-                    let m: TfMessage = decode(topic, *t, data)?;
-                    tf.add(&m.transforms, topic == "/tf_static");
+        if let Some(t) = &o.pose_topic {
+            match topics.get(t).map(|i| i.schema.as_str()) {
+                Some(POSE_STAMPED | ODOMETRY) => {}
+                Some(other) => {
+                    bail!("pose topic {t} has {other} messages, not {POSE_STAMPED} or {ODOMETRY}")
                 }
-                CAMERA_INFO => {
-                    let m: CameraInfo = decode(topic, *t, data)?;
-                    infos
-                        .entry(topic.clone())
-                        .or_default()
-                        .push((m.header.stamp.nanos(), m));
-                }
-                IMAGE if *topic == depth_topic => depths.push(decode::<Image>(topic, *t, data)?),
-                IMAGE if Some(topic) == labels_topic.as_ref() => {
-                    let m: Image = decode(topic, *t, data)?;
-                    labels.insert(m.header.stamp.nanos(), m);
-                }
-                _ => {}
+                None => bail!("pose topic {t} has no messages in the bag"),
             }
         }
-        tf.finish();
-        let frame_id = depths
-            .first()
-            .map_or(String::new(), |d| d.header.frame_id.clone());
-        let info_topic = match &o.camera_info_topic {
-            Some(t) => t.clone(),
-            None => infos
-                .iter()
-                .find(|(_, v)| v.iter().any(|(_, m)| m.header.frame_id == frame_id))
-                .or_else(|| infos.iter().next())
-                .map(|(t, _)| t.clone())
-                .ok_or_else(|| {
-                    anyhow!("{}: no sensor_msgs/msg/CameraInfo topic", path.display())
-                })?,
-        };
-        let infos = infos
-            .remove(&info_topic)
-            .ok_or_else(|| anyhow!("camera-info topic {info_topic} is not in the bag"))?;
+        let mut c = collect(
+            &msgs,
+            &depth_topic,
+            labels_topic.as_deref(),
+            o.pose_topic.as_deref(),
+        )?;
+        let info_topic = camera_info_topic(&c, o, path)?;
+        let infos = c.infos.remove(&info_topic).unwrap_or_default();
         let world = o.world_frame.clone().unwrap_or_else(|| "world".into());
-        depths.sort_by_key(|d| d.header.stamp.nanos());
         let mut bag = Bag {
             name: path
                 .file_stem()
@@ -208,9 +186,16 @@ impl Bag {
             ids: Vec::new(),
             frames: Vec::new(),
         };
-        for depth in depths {
+        let paired = Paired {
+            labels: &c.labels,
+            infos: &infos,
+            tf: &c.tf,
+            tolerance: o.sync_tolerance_ns,
+            label_map: &o.label_map,
+        };
+        for depth in std::mem::take(&mut c.depths) {
             let stamp = depth.header.stamp.nanos();
-            match bag.pair(depth, &labels, &infos, &tf, o.sync_tolerance_ns) {
+            match bag.pair(depth, &paired) {
                 Ok(f) => bag.frames.push(f),
                 Err(e) => bag.skipped.push((stamp, format!("{e:#}"))),
             }
@@ -226,20 +211,14 @@ impl Bag {
     }
 
     /// Pairs a depth image with its labels, camera and pose.
-    fn pair(
-        &self,
-        depth: Image,
-        labels: &BTreeMap<u64, Image>,
-        infos: &[(u64, CameraInfo)],
-        tf: &TfBuffer,
-        tolerance: u64,
-    ) -> Result<BagFrame> {
+    fn pair(&self, depth: Image, p: &Paired) -> Result<BagFrame> {
         let (depth_topic, labels_topic, info_topic, world) = &self.used;
         let stamp = depth.header.stamp.nanos();
         let at = |topic: &str| format!("{topic} at {:.9} s", stamp as f64 * 1e-9);
         check_image(&depth, &["16UC1", "32FC1"]).with_context(|| at(depth_topic))?;
-        let near = |t: u64| t.abs_diff(stamp) <= tolerance;
-        let info = infos
+        let near = |t: u64| t.abs_diff(stamp) <= p.tolerance;
+        let info = p
+            .infos
             .iter()
             .min_by_key(|(t, _)| t.abs_diff(stamp))
             .filter(|(t, _)| near(*t))
@@ -249,11 +228,12 @@ impl Bag {
                     at(info_topic)
                 )
             })?;
-        let camera = pinhole(&info.1, &depth).with_context(|| at(info_topic))?;
+        let rectified = depth_topic.contains("rect");
+        let camera = pinhole(&info.1, &depth, rectified).with_context(|| at(info_topic))?;
         let labels = match labels_topic {
             None => None,
             Some(topic) => {
-                let m = nearest(labels, stamp)
+                let m = nearest(p.labels, stamp)
                     .filter(|(t, _)| near(*t))
                     .ok_or_else(|| anyhow!("{}: no labels within the sync tolerance", at(topic)))?
                     .1;
@@ -268,12 +248,12 @@ impl Bag {
                         depth.height
                     );
                 }
-                Some(rows(m, 1).concat())
+                Some(map_labels(rows(m, 1).concat(), p.label_map))
             }
         };
-        let pose = tf
-            .lookup(world, &depth.header.frame_id, stamp)
-            .with_context(|| at(depth_topic))?;
+        let pose =
+            p.tf.lookup(world, &depth.header.frame_id, stamp)
+                .with_context(|| at(depth_topic))?;
         Ok(BagFrame {
             stamp,
             depth,
@@ -287,6 +267,127 @@ impl Bag {
     pub fn stamps(&self) -> Vec<u64> {
         self.frames.iter().map(|f| f.stamp).collect()
     }
+}
+
+/// What a depth image is paired with.
+struct Paired<'a> {
+    labels: &'a BTreeMap<u64, Image>,
+    infos: &'a [(u64, CameraInfo)],
+    tf: &'a TfBuffer,
+    tolerance: u64,
+    label_map: &'a [(u8, u8)],
+}
+
+/// The messages sndt uses, decoded.
+struct Collected {
+    tf: TfBuffer,
+    infos: BTreeMap<String, Vec<(u64, CameraInfo)>>,
+    depths: Vec<Image>,
+    labels: BTreeMap<u64, Image>,
+}
+
+/// Decodes the transforms, camera infos, depth and label images; poses from `pose_topic`
+/// become transforms (of the depth camera for `PoseStamped`, of the odometry's child
+/// frame for `Odometry`) that replace the `/tf` and `/tf_static` ones of that frame.
+fn collect(
+    msgs: &[RawMessage],
+    depth_topic: &str,
+    labels_topic: Option<&str>,
+    pose_topic: Option<&str>,
+) -> Result<Collected> {
+    let mut c = Collected {
+        tf: TfBuffer::default(),
+        infos: BTreeMap::new(),
+        depths: Vec::new(),
+        labels: BTreeMap::new(),
+    };
+    let (mut tfs, mut poses) = (Vec::new(), Vec::new());
+    for (topic, schema, t, data) in msgs {
+        match schema.as_str() {
+            TF => tfs.push((topic == "/tf_static", decode::<TfMessage>(topic, *t, data)?)),
+            CAMERA_INFO => {
+                let m: CameraInfo = decode(topic, *t, data)?;
+                let entry = c.infos.entry(topic.clone()).or_default();
+                entry.push((m.header.stamp.nanos(), m));
+            }
+            IMAGE if topic == depth_topic => c.depths.push(decode::<Image>(topic, *t, data)?),
+            IMAGE if Some(topic.as_str()) == labels_topic => {
+                let m: Image = decode(topic, *t, data)?;
+                c.labels.insert(m.header.stamp.nanos(), m);
+            }
+            POSE_STAMPED if Some(topic.as_str()) == pose_topic => poses
+                .push(decode::<PoseStamped>(topic, *t, data).map(|m| (None, m.header, m.pose))?),
+            ODOMETRY if Some(topic.as_str()) == pose_topic => {
+                let m: Odometry = decode(topic, *t, data)?;
+                poses.push((Some(m.child_frame_id), m.header, m.pose.pose));
+            }
+            _ => {}
+        }
+    }
+    c.depths.sort_by_key(|d| d.header.stamp.nanos());
+    let camera = c
+        .depths
+        .first()
+        .map_or(String::new(), |d| d.header.frame_id.clone());
+    let posed: Vec<TransformStamped> = poses
+        .into_iter()
+        .map(|(child, header, pose)| TransformStamped {
+            header,
+            child_frame_id: child.unwrap_or_else(|| camera.clone()),
+            transform: Transform {
+                translation: Vector3 {
+                    x: pose.position.x,
+                    y: pose.position.y,
+                    z: pose.position.z,
+                },
+                rotation: pose.orientation,
+            },
+        })
+        .collect();
+    c.tf.add(&posed, false);
+    let posed_frames: Vec<&String> = posed.iter().map(|t| &t.child_frame_id).collect();
+    for (fixed, m) in &tfs {
+        let keep: Vec<TransformStamped> = m
+            .transforms
+            .iter()
+            .filter(|t| !posed_frames.contains(&&t.child_frame_id))
+            .cloned()
+            .collect();
+        c.tf.add(&keep, *fixed);
+    }
+    c.tf.finish();
+    Ok(c)
+}
+
+/// The camera-info topic: the one named, else the one in the depth images' frame, else
+/// the only one.
+fn camera_info_topic(c: &Collected, o: &BagOptions, path: &Path) -> Result<String> {
+    if let Some(t) = &o.camera_info_topic {
+        if !c.infos.contains_key(t) {
+            bail!("camera-info topic {t} has no sensor_msgs/msg/CameraInfo messages in the bag");
+        }
+        return Ok(t.clone());
+    }
+    let frame = c.depths.first().map_or("", |d| d.header.frame_id.as_str());
+    c.infos
+        .iter()
+        .find(|(_, v)| v.iter().any(|(_, m)| m.header.frame_id == frame))
+        .or_else(|| c.infos.iter().next())
+        .map(|(t, _)| t.clone())
+        .ok_or_else(|| anyhow!("{}: no sensor_msgs/msg/CameraInfo topic", path.display()))
+}
+
+/// Labels through a label map (`(id, class)`; unlisted ids become void); unchanged when
+/// the map is empty.
+fn map_labels(mut labels: Vec<u8>, map: &[(u8, u8)]) -> Vec<u8> {
+    if !map.is_empty() {
+        let mut table = [0u8; 256];
+        for &(id, class) in map {
+            table[id as usize] = class;
+        }
+        labels.iter_mut().for_each(|l| *l = table[*l as usize]);
+    }
+    labels
 }
 
 /// The entry of `map` nearest to `stamp`.
@@ -333,12 +434,15 @@ fn rows(m: &Image, bpp: usize) -> Vec<&[u8]> {
         .collect()
 }
 
-/// The pinhole of a camera info for an image of that size (sndt's pixel centres are at
-/// `col + 0.5`, ROS's at integers).
-fn pinhole(info: &CameraInfo, image: &Image) -> Result<Pinhole> {
-    if info.d.iter().any(|&d| d != 0.0) {
+/// The pinhole of a camera info for an image of that size: `K` for an image without
+/// distortion, the projection `P` for a rectified one (whose `D` describes the raw image);
+/// a raw image with distortion is refused. sndt's pixel centres are at `col + 0.5`, ROS's
+/// at integers.
+fn pinhole(info: &CameraInfo, image: &Image, rectified: bool) -> Result<Pinhole> {
+    let distorted = info.d.iter().any(|&d| d != 0.0);
+    if distorted && !rectified {
         bail!(
-            "distortion model {:?} with non-zero coefficients: sndt needs rectified depth (a rect topic with zero distortion)",
+            "distortion model {:?} with non-zero coefficients on an unrectified image: give a rectified depth topic (image_rect...)",
             info.distortion_model
         );
     }
@@ -351,22 +455,27 @@ fn pinhole(info: &CameraInfo, image: &Image) -> Result<Pinhole> {
             image.height
         );
     }
-    let k = info.k;
-    let p = Pinhole {
-        fx: k[0] as f32,
-        fy: k[4] as f32,
-        cx: (k[2] + 0.5) as f32,
-        cy: (k[5] + 0.5) as f32,
+    let (k, p) = (info.k, info.p);
+    let [fx, fy, cx, cy] = if rectified {
+        [p[0], p[5], p[2], p[6]]
+    } else {
+        [k[0], k[4], k[2], k[5]]
+    };
+    let cam = Pinhole {
+        fx: fx as f32,
+        fy: fy as f32,
+        cx: (cx + 0.5) as f32,
+        cy: (cy + 0.5) as f32,
         width: info.width,
         height: info.height,
     };
-    let ok = [p.fx, p.fy].iter().all(|f| f.is_finite() && *f > 0.0)
-        && p.cx.is_finite()
-        && p.cy.is_finite();
+    let ok = [cam.fx, cam.fy].iter().all(|f| f.is_finite() && *f > 0.0)
+        && cam.cx.is_finite()
+        && cam.cy.is_finite();
     if !ok {
-        bail!("invalid intrinsics K = {k:?}");
+        bail!("invalid intrinsics: K = {k:?}, P = {p:?}");
     }
-    Ok(p)
+    Ok(cam)
 }
 
 /// Depth in metres of a checked depth image: `16UC1` millimetres as the prepared layout

@@ -446,6 +446,38 @@ pub mod definitions {
         "string filename\nuint8[] data\n",
     );
 
+    /// `geometry_msgs/msg/PoseStamped`.
+    pub fn pose_stamped() -> (&'static str, String) {
+        let own = "std_msgs/Header header\nPose pose\n";
+        (
+            "geometry_msgs/msg/PoseStamped",
+            with_deps(own, &[HEADER, TIME, POSE, POINT, QUATERNION]),
+        )
+    }
+
+    /// `nav_msgs/msg/Odometry`.
+    pub fn odometry() -> (&'static str, String) {
+        let own = "std_msgs/Header header\nstring child_frame_id\ngeometry_msgs/PoseWithCovariance pose\ngeometry_msgs/TwistWithCovariance twist\n";
+        let deps = [
+            HEADER,
+            TIME,
+            (
+                "geometry_msgs/PoseWithCovariance",
+                "Pose pose\nfloat64[36] covariance\n",
+            ),
+            POSE,
+            POINT,
+            QUATERNION,
+            (
+                "geometry_msgs/TwistWithCovariance",
+                "Twist twist\nfloat64[36] covariance\n",
+            ),
+            ("geometry_msgs/Twist", "Vector3 linear\nVector3 angular\n"),
+            VECTOR3,
+        ];
+        ("nav_msgs/msg/Odometry", with_deps(own, &deps))
+    }
+
     /// `sensor_msgs/msg/PointCloud2`.
     pub fn point_cloud2() -> (&'static str, String) {
         let own = "std_msgs/Header header\nuint32 height\nuint32 width\nPointField[] fields\nbool is_bigendian\nuint32 point_step\nuint32 row_step\nuint8[] data\nbool is_dense\n";
