@@ -219,7 +219,7 @@ fn every_mapper_runs_through_one_loop() {
             LabelSource::Gt,
             1,
             r,
-            |_| Ok(()),
+            |_, _| Ok(()),
             |f, labels| {
                 assert_eq!(labels.len(), f.pixels());
                 assert!(labels

@@ -390,3 +390,58 @@ fn pose_topics_label_maps_and_unordered_stamps_give_the_same_frames() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn sndt_map_writes_a_growing_map_bag_per_trajectory() {
+    use sndt_host::eval::evaluate::{evaluate, EvalOptions};
+    use sndt_host::ros::export::{GAUSSIANS, POINTS};
+    use sndt_host::ros::msgs::PointCloud2;
+    let dir = temp("growing");
+    let s = Synthetic::new(SynthOptions {
+        scenes: 2,
+        frames: 3,
+        predictions: false,
+        ..SynthOptions::default()
+    })
+    .unwrap();
+    let options = EvalOptions {
+        mcap: Some(dir.join("m.mcap")),
+        mcap_every: Some(2),
+        keep_maps: true,
+        ..EvalOptions::new(Config::DEFAULT, LabelSource::Gt)
+    };
+    let eval = evaluate(&s, &options, &|| {}).unwrap();
+    for ((name, _), map) in s.trajectories().iter().zip(&eval.maps) {
+        let path = dir.join(format!("m_{}.mcap", name.replace('/', "_")));
+        let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let mut clouds = Vec::new();
+        let mut markers = 0;
+        for m in mcap::MessageStream::new(&bytes).unwrap() {
+            let m = m.unwrap();
+            if m.channel.topic == POINTS {
+                clouds.push((
+                    m.log_time,
+                    cdr::deserialize::<PointCloud2>(&m.data).unwrap(),
+                ));
+            }
+            markers += usize::from(m.channel.topic == GAUSSIANS);
+        }
+        // After frame 2 (every 2) and after the last, frame 3, at their 10 Hz stamps.
+        let stamps: Vec<u64> = clouds.iter().map(|c| c.0).collect();
+        assert_eq!(
+            stamps,
+            vec![frame_time(1).nanos(), frame_time(2).nanos()],
+            "{name}"
+        );
+        assert_eq!(markers, 2);
+        // The last cloud: one point per occupied voxel with at least 3 points.
+        let occupied = map
+            .voxels()
+            .filter(|v| v.occupancy() == sndt_core::Occupancy::Occupied && v.gaussian.count >= 3)
+            .count();
+        let last = &clouds[1].1;
+        assert_eq!(last.width as usize, occupied);
+        assert_eq!(last.data.len(), 28 * occupied);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -38,6 +38,14 @@ pub struct MapArgs {
     /// Also write each trajectory's map snapshot to `<out>/maps/<scene>_<cam>.sndt`.
     #[arg(long)]
     pub save_maps: bool,
+    /// Also write each trajectory's map as a ROS 2 bag (PointCloud2, MarkerArray,
+    /// /tf_static): this file for one trajectory, `<stem>_<scene>_<cam>.mcap` for several.
+    #[arg(long)]
+    pub mcap: Option<PathBuf>,
+    /// With --mcap: write the map every N frames as well, so the bag plays back as a
+    /// growing map.
+    #[arg(long)]
+    pub every: Option<usize>,
 }
 
 /// Runs `sndt map`: maps and evaluates every trajectory, prints the per-trajectory lines
@@ -54,6 +62,9 @@ pub fn run(a: &MapArgs) -> Result<()> {
             out: Some(a.out.clone()),
             stride: a.stride,
             save_maps: a.save_maps.then(|| a.out.join("maps")),
+            mcap: a.mcap.clone(),
+            mcap_every: a.every,
+            mcap_world: a.open.world_frame.clone(),
             ..EvalOptions::new(
                 Config {
                     votes_per_frame: a.votes_per_frame,

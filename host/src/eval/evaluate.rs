@@ -16,6 +16,9 @@
 use crate::dataset::frame::{Frame, FrameId, LabelSource};
 use crate::dataset::source::Dataset;
 use crate::eval::metrics::{Confusion, Metrics};
+use crate::ros::export::MapBag;
+use crate::ros::msgs::Time;
+use crate::ros::write::frame_time;
 use crate::semantic_map::{boxed_map, HostMap, SemanticMap};
 use anyhow::{anyhow, Context, Result};
 use rayon::prelude::*;
@@ -42,6 +45,13 @@ pub struct EvalOptions {
     /// Directory to write each trajectory's final map snapshot into
     /// (`<dir>/<scene>_<cam>.sndt`, readable by `sndt export`).
     pub save_maps: Option<PathBuf>,
+    /// ROS 2 bag of each trajectory's map ([`crate::ros::export`]): this file for one
+    /// trajectory, `<stem>_<scene>_<cam>.mcap` beside it for several.
+    pub mcap: Option<PathBuf>,
+    /// With `mcap`: write the map every this many frames as well as at the end.
+    pub mcap_every: Option<usize>,
+    /// With `mcap`: the frame `/tf_static` attaches the map frame to.
+    pub mcap_world: String,
 }
 
 impl EvalOptions {
@@ -55,6 +65,9 @@ impl EvalOptions {
             keep_frames: Vec::new(),
             keep_maps: false,
             save_maps: None,
+            mcap: None,
+            mcap_every: None,
+            mcap_world: "world".into(),
         }
     }
 }
@@ -174,7 +187,7 @@ impl MapScore {
 ///
 /// Frames arrive one at a time from `frames`, so a caller can load them lazily: borrowed
 /// frames are rendered as they are, owned ones are kept without their predictions, which
-/// rendering does not need. `after_update` sees each frame after its (timed) update,
+/// rendering does not need. `after_update` sees each frame and the map after its (timed) update,
 /// `after_render` each frame's render.
 pub fn map_and_score<'f, M: SemanticMap + ?Sized>(
     map: &mut M,
@@ -182,7 +195,7 @@ pub fn map_and_score<'f, M: SemanticMap + ?Sized>(
     labels: LabelSource,
     stride: u32,
     readouts: &[M::Readout],
-    mut after_update: impl FnMut(&Frame) -> Result<()>,
+    mut after_update: impl FnMut(&Frame, &M) -> Result<()>,
     mut after_render: impl FnMut(&Frame, &[u8]) -> Result<()>,
 ) -> Result<MapScore> {
     let mut update_ms = Vec::new();
@@ -192,7 +205,7 @@ pub fn map_and_score<'f, M: SemanticMap + ?Sized>(
         let t = Instant::now();
         map.integrate_frame(&frame, labels, stride)?;
         update_ms.push(t.elapsed().as_secs_f64() * 1e3);
-        after_update(&frame)?;
+        after_update(&frame, map)?;
         kept.push(match frame {
             Cow::Borrowed(f) => Cow::Borrowed(f),
             Cow::Owned(f) => Cow::Owned(Frame {
@@ -231,10 +244,21 @@ pub fn evaluate(
         .config
         .validate()
         .map_err(|e| anyhow!("config: {e:?}"))?;
-    let parts: Vec<Result<TrajectoryEvaluation>> = dataset
-        .trajectories()
+    let trajectories = dataset.trajectories();
+    let single = trajectories.len() == 1;
+    let parts: Vec<Result<TrajectoryEvaluation>> = trajectories
         .par_iter()
-        .map(|(name, ids)| evaluate_trajectory(dataset, name, ids, options, progress))
+        .map(|(name, ids)| {
+            let bag = match &options.mcap {
+                Some(path) => Some(MapBag::create(
+                    &bag_path(path, name, single),
+                    &options.mcap_world,
+                    Time::default(),
+                )?),
+                None => None,
+            };
+            evaluate_trajectory(dataset, (name, ids), options, bag, progress)
+        })
         .collect();
     let mut eval = Evaluation {
         confusion: Confusion::default(),
@@ -268,9 +292,9 @@ struct TrajectoryEvaluation {
 /// `options` asks, the final map saved and kept as asked.
 fn evaluate_trajectory(
     dataset: &dyn Dataset,
-    name: &str,
-    ids: &[FrameId],
+    (name, ids): (&str, &[FrameId]),
     options: &EvalOptions,
+    mut bag: Option<MapBag>,
     progress: &(dyn Fn() + Sync),
 ) -> Result<TrajectoryEvaluation> {
     let mut map: Box<HostMap> = boxed_map(options.config).map_err(|e| anyhow!("config: {e:?}"))?;
@@ -282,8 +306,11 @@ fn evaluate_trajectory(
         options.labels,
         options.stride,
         &[()],
-        |frame| {
+        |frame, map| {
             score_input(&mut input, frame, options.labels);
+            if let Some(b) = bag.as_mut() {
+                write_growing(b, dataset, ids, frame, map, options.mcap_every)?;
+            }
             progress();
             Ok(())
         },
@@ -298,6 +325,9 @@ fn evaluate_trajectory(
             Ok(())
         },
     )?;
+    if let Some(b) = bag {
+        b.finish()?;
+    }
     if let Some(dir) = &options.save_maps {
         save_snapshot(
             map.as_ref(),
@@ -394,3 +424,36 @@ pub const PAPER_SNDT: [(f32, [f64; 3], [f64; 3], f64); 4] = [
 
 /// The paper's ESANet-R34-NBt1D alone (no mapping) on the Hypersim test set: mIoU (%).
 pub const PAPER_ESANET_MIOU: f64 = 41.17;
+
+/// Writes `map` into `bag` after `frame` when it is every `every`-th frame of `ids` or the
+/// last, stamped with the frame's recording time (10 Hz from 1 s when unknown).
+fn write_growing(
+    bag: &mut MapBag,
+    dataset: &dyn Dataset,
+    ids: &[FrameId],
+    frame: &Frame,
+    map: &HostMap,
+    every: Option<usize>,
+) -> Result<()> {
+    let k = ids.iter().position(|id| *id == frame.id).unwrap_or(0);
+    let due = every.is_some_and(|n| n > 0 && (k + 1) % n == 0);
+    if due || k + 1 == ids.len() {
+        let stamp = dataset
+            .stamp(&frame.id)
+            .map_or(frame_time(k), Time::from_nanos);
+        bag.write(map, stamp)?;
+    }
+    Ok(())
+}
+
+/// The bag of trajectory `name`: `path` itself when it is the only one, else
+/// `<stem>_<scene>_<cam>.mcap` beside it.
+pub fn bag_path(path: &Path, name: &str, single: bool) -> PathBuf {
+    if single {
+        return path.to_path_buf();
+    }
+    let stem = path
+        .file_stem()
+        .map_or("map".into(), |s| s.to_string_lossy());
+    path.with_file_name(format!("{stem}_{}.mcap", name.replace('/', "_")))
+}

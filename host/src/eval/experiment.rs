@@ -422,7 +422,7 @@ fn run_map<M: SemanticMap + ?Sized>(
         labels,
         1,
         readouts,
-        |_| {
+        |_, _| {
             progress();
             Ok(())
         },

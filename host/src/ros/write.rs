@@ -19,8 +19,11 @@ pub struct BagWriter {
 }
 
 impl BagWriter {
-    /// Creates `path`.
+    /// Creates `path` (and its directory).
     pub fn create(path: &Path) -> Result<BagWriter> {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        }
         let file = File::create(path).with_context(|| format!("creating {}", path.display()))?;
         let writer = mcap::Writer::new(BufWriter::new(file))
             .with_context(|| format!("writing {}", path.display()))?;
