@@ -445,3 +445,108 @@ fn sndt_map_writes_a_growing_map_bag_per_trajectory() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// One synthetic frame on `depth_topic` with its labels `offset_ns` later and a camera info
+/// of distortion `d`, posed by /tf.
+fn one_frame_bag(path: &std::path::Path, depth_topic: &str, offset_ns: u64, d: f64) {
+    let s = split(1);
+    let f = s.load(&s.frames()[0]).unwrap();
+    let sndt_host::dataset::frame::Rays::Pinhole(cam) = *f.rays else {
+        unreachable!()
+    };
+    let mut bag = BagWriter::create(path).unwrap();
+    for (topic, def) in [
+        (depth_topic, msgs::definitions::image()),
+        (names::LABELS, msgs::definitions::image()),
+        (names::CAMERA_INFO, msgs::definitions::camera_info()),
+        ("/tf", msgs::definitions::tf_message()),
+    ] {
+        bag.add_topic(topic, def).unwrap();
+    }
+    let stamp = frame_time(0);
+    let header = |ns: u64| Header {
+        stamp: msgs::Time::from_nanos(ns),
+        frame_id: names::CAMERA.into(),
+    };
+    let tf = TransformStamped {
+        header: Header {
+            stamp,
+            frame_id: names::WORLD.into(),
+        },
+        child_frame_id: names::CAMERA.into(),
+        transform: camera_transform(&f.pose),
+    };
+    bag.write(
+        "/tf",
+        stamp,
+        &TfMessage {
+            transforms: vec![tf],
+        },
+    )
+    .unwrap();
+    let mut info = camera_info(header(stamp.nanos()), &cam);
+    info.d = vec![d, 0.0, 0.0, 0.0, 0.0];
+    bag.write(names::CAMERA_INFO, stamp, &info).unwrap();
+    let image = |ns: u64, encoding: &str, bpp: u32, data: Vec<u8>| Image {
+        header: header(ns),
+        height: cam.height,
+        width: cam.width,
+        encoding: encoding.into(),
+        is_bigendian: 0,
+        step: cam.width * bpp,
+        data,
+    };
+    let mm: Vec<u8> = f
+        .depth
+        .iter()
+        .flat_map(|&d| ((d * 1000.0) as u16).to_le_bytes())
+        .collect();
+    bag.write(depth_topic, stamp, &image(stamp.nanos(), "16UC1", 2, mm))
+        .unwrap();
+    let later = stamp.nanos() + offset_ns;
+    let labels = f.labels.clone().unwrap();
+    bag.write(names::LABELS, stamp, &image(later, "mono8", 1, labels))
+        .unwrap();
+    bag.finish().unwrap();
+}
+
+#[test]
+fn labels_pair_within_the_sync_tolerance_and_raw_distorted_images_are_refused() {
+    let dir = temp("sync");
+    let p = dir.join("late.mcap");
+    one_frame_bag(&p, names::DEPTH, 5_000_000, 0.0);
+    let bag = Bag::open(&p, &BagOptions::default()).unwrap();
+    assert_eq!(bag.frames().len(), 0);
+    let why = &bag.skipped[0].1;
+    assert!(
+        why.contains(names::LABELS)
+            && why.contains("sync tolerance")
+            && why.contains("1.000000000"),
+        "{why}"
+    );
+    let o = BagOptions {
+        sync_tolerance_ns: 10_000_000,
+        ..BagOptions::default()
+    };
+    assert_eq!(Bag::open(&p, &o).unwrap().frames().len(), 1);
+    // Distortion on an unrectified topic: refused, naming the camera info topic; the same
+    // camera info for a rectified topic (image_rect...) is fine (its P describes it).
+    let p = dir.join("raw.mcap");
+    one_frame_bag(&p, "/camera/depth/image_raw", 0, 0.1);
+    let bag = Bag::open(&p, &BagOptions::default()).unwrap();
+    let why = &bag.skipped[0].1;
+    assert!(
+        why.contains("distortion") && why.contains(names::CAMERA_INFO),
+        "{why}"
+    );
+    let p = dir.join("rect.mcap");
+    one_frame_bag(&p, names::DEPTH, 0, 0.1);
+    assert_eq!(
+        Bag::open(&p, &BagOptions::default())
+            .unwrap()
+            .frames()
+            .len(),
+        1
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
