@@ -7,9 +7,9 @@ use sndt_host::dataset::frame::LabelSource;
 use sndt_host::dataset::synthetic::{write_split, SynthOptions, Synthetic};
 use sndt_host::dataset::{open, Dataset, OpenOptions};
 use sndt_host::ros::bag::{Bag, BagOptions};
-use sndt_host::ros::msgs::{self, Header, Image, TfMessage, TransformStamped};
+use sndt_host::ros::msgs::{self, Header, TfMessage, TransformStamped};
 use sndt_host::ros::write::{
-    camera_info, camera_transform, frame_time, names, write_trajectory, BagWriter,
+    camera_info, camera_transform, frame_time, image, names, write_trajectory, BagWriter,
 };
 use sndt_host::semantic_map::{boxed_map, integrate_frame, HostMap};
 use std::path::PathBuf;
@@ -122,15 +122,7 @@ fn custom_bag(path: &std::path::Path, encoding: &str, gap: bool, with_info: bool
             .iter()
             .flat_map(|&d| ((d * 1000.0) as u16).to_le_bytes())
             .collect();
-        let img = Image {
-            header,
-            height: cam.height,
-            width: cam.width,
-            encoding: encoding.into(),
-            is_bigendian: 0,
-            step: cam.width * 2,
-            data: mm,
-        };
+        let img = image(header, &cam, encoding, 2, mm);
         bag.write(names::DEPTH, stamp, &img).unwrap();
     }
     bag.finish().unwrap();
@@ -309,18 +301,13 @@ fn write_images(
         .iter()
         .flat_map(|&d| sndt_host::dataset::prepared::depth_to_mm(d).to_le_bytes())
         .collect();
-    let image = |encoding: &str, step: u32, data: Vec<u8>| Image {
-        header: header.clone(),
-        height: cam.height,
-        width: cam.width,
-        encoding: encoding.into(),
-        is_bigendian: 0,
-        step,
-        data,
-    };
     let stamp = header.stamp;
-    bag.write(names::DEPTH, stamp, &image("16UC1", cam.width * 2, mm))
-        .unwrap();
+    bag.write(
+        names::DEPTH,
+        stamp,
+        &image(header.clone(), cam, "16UC1", 2, mm),
+    )
+    .unwrap();
     let shifted: Vec<u8> = f
         .labels
         .as_ref()
@@ -328,8 +315,12 @@ fn write_images(
         .iter()
         .map(|&l| l + 100)
         .collect();
-    bag.write(names::LABELS, stamp, &image("mono8", cam.width, shifted))
-        .unwrap();
+    bag.write(
+        names::LABELS,
+        stamp,
+        &image(header.clone(), cam, "mono8", 1, shifted),
+    )
+    .unwrap();
 }
 
 #[test]
@@ -487,26 +478,25 @@ fn one_frame_bag(path: &std::path::Path, depth_topic: &str, offset_ns: u64, d: f
     let mut info = camera_info(header(stamp.nanos()), &cam);
     info.d = vec![d, 0.0, 0.0, 0.0, 0.0];
     bag.write(names::CAMERA_INFO, stamp, &info).unwrap();
-    let image = |ns: u64, encoding: &str, bpp: u32, data: Vec<u8>| Image {
-        header: header(ns),
-        height: cam.height,
-        width: cam.width,
-        encoding: encoding.into(),
-        is_bigendian: 0,
-        step: cam.width * bpp,
-        data,
-    };
     let mm: Vec<u8> = f
         .depth
         .iter()
         .flat_map(|&d| ((d * 1000.0) as u16).to_le_bytes())
         .collect();
-    bag.write(depth_topic, stamp, &image(stamp.nanos(), "16UC1", 2, mm))
-        .unwrap();
+    bag.write(
+        depth_topic,
+        stamp,
+        &image(header(stamp.nanos()), &cam, "16UC1", 2, mm),
+    )
+    .unwrap();
     let later = stamp.nanos() + offset_ns;
     let labels = f.labels.clone().unwrap();
-    bag.write(names::LABELS, stamp, &image(later, "mono8", 1, labels))
-        .unwrap();
+    bag.write(
+        names::LABELS,
+        stamp,
+        &image(header(later), &cam, "mono8", 1, labels),
+    )
+    .unwrap();
     bag.finish().unwrap();
 }
 

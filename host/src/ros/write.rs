@@ -202,8 +202,8 @@ pub fn write_trajectory(path: &Path, frames: impl Iterator<Item = Result<Frame>>
     Ok(n)
 }
 
-/// An image message of `bytes_per_pixel`-byte pixels, little-endian.
-fn image(
+/// An image message of `cam`'s size with `bpp`-byte pixels, little-endian, unpadded rows.
+pub fn image(
     header: Header,
     cam: &sndt_core::Pinhole,
     encoding: &str,
