@@ -24,8 +24,10 @@ if ! "$VENV/bin/python" -c 'import mcap, mcap_ros2, png' 2>/dev/null; then
 fi
 
 step "a synthetic trajectory: prepared layout (sndt synth) and a bag written by Python"
-cargo build --release -q -p sndt-host --bin sndt
-SNDT=target/release/sndt
+# The dev profile (opt-level 2, see Cargo.toml) shares its build with the rest of the
+# test command; a release build would cost a minute more.
+cargo build -q -p sndt-host --bin sndt
+SNDT=target/debug/sndt
 rm -rf "$WORK" && mkdir -p "$WORK"
 "$SNDT" synth --scenes 1 --frames 8 --no-predictions --out "$WORK/prepared" >/dev/null
 "$VENV/bin/python" scripts/ros/bag_from_prepared.py "$WORK/prepared" synth_00_living/cam_00 "$WORK/python.mcap"
