@@ -258,8 +258,8 @@ fn write_iou_chart_and_metrics(runs: &Runs, a: &DemoArgs) -> Result<()> {
         "pred": runs.pred.to_json(),
         "network_alone": { "miou": net.miou, "mpacc": net.mpacc },
     });
-    std::fs::write(
-        a.out.join("metrics.json"),
+    crate::output::atomic::write_bytes(
+        &a.out.join("metrics.json"),
         serde_json::to_string_pretty(&json)?,
     )?;
     println!(

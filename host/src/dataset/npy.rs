@@ -142,6 +142,11 @@ pub fn read_topk(path: &Path, width: u32, height: u32) -> Result<TopK> {
 /// # std::fs::remove_dir_all(&dir).unwrap();
 /// ```
 pub fn write_topk(path: &Path, topk: &TopK, width: u32, height: u32) -> Result<()> {
+    crate::output::atomic::write_atomic(path, |tmp| write_topk_to(tmp, topk, width, height))
+}
+
+/// What [`write_topk`] writes, into `path` directly.
+fn write_topk_to(path: &Path, topk: &TopK, width: u32, height: u32) -> Result<()> {
     let shown = path.display();
     let n = width as usize * height as usize;
     if topk.classes.len() != n || topk.scores.len() != n {

@@ -17,6 +17,7 @@
 //! Hypersim pinhole, or with [`OpenOptions::paper_fy`] the authors' wrong fy.
 
 use crate::dataset::frame::{Frame, FrameId, Rays};
+use crate::output::atomic::write_atomic;
 
 use crate::dataset::npy;
 use crate::dataset::source::Dataset;
@@ -27,7 +28,6 @@ use std::collections::HashMap;
 use std::fs::File;
 use std::io::{BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
 /// Nominal Hypersim focal length in pixels (fx = fy), for 1024x768 images.
@@ -470,30 +470,6 @@ fn read_png16(path: &Path) -> Result<(u32, u32, Vec<u16>)> {
 
 fn read_png8(path: &Path) -> Result<(u32, u32, Vec<u8>)> {
     read_png(path, png::BitDepth::Eight)
-}
-
-/// Writes a file atomically: into a unique temporary file beside it, then renamed over
-/// it, so concurrent writers of identical content and concurrent readers are safe.
-fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let parent = path
-        .parent()
-        .with_context(|| format!("{}: no parent directory", path.display()))?;
-    std::fs::create_dir_all(parent).with_context(|| format!("creating {}", parent.display()))?;
-    let tmp = parent.join(format!(
-        ".{}.tmp-{}-{}",
-        path.file_name().map_or("f".into(), |n| n.to_string_lossy()),
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    let result = write(&tmp).and_then(|()| {
-        std::fs::rename(&tmp, path)
-            .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))
-    });
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
 }
 
 /// Writes a plain 8-bit grayscale PNG (atomically: temporary file, then rename).

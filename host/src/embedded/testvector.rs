@@ -40,6 +40,7 @@
 //! `W H` is a multiple of 4, so every depth image starts 4-byte aligned.
 
 use crate::embedded::view::{ViewRender, VIEW_HEIGHT, VIEW_WIDTH};
+use crate::output::atomic::write_bytes;
 use anyhow::{bail, ensure, Context, Result};
 use sndt_core::{
     pose_from_matrix, Config, Depth, DepthImage, DepthKind, FrameReport, Isometry3, LabelImage,
@@ -595,13 +596,11 @@ pub fn write(dir: &std::path::Path) -> Result<VectorRun> {
     let run = run(&TestVector::parse(&bytes)?)?;
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let bin = dir.join("frames.bin");
-    std::fs::write(&bin, &bytes).with_context(|| format!("writing {}", bin.display()))?;
+    write_bytes(&bin, &bytes)?;
     let txt = dir.join("expected_crc.txt");
-    std::fs::write(&txt, format!("{:#010x}\n", run.crc))
-        .with_context(|| format!("writing {}", txt.display()))?;
+    write_bytes(&txt, format!("{:#010x}\n", run.crc))?;
     let txt = dir.join("expected_render_crc.txt");
-    std::fs::write(&txt, format!("{:#010x}\n", run.view.crc))
-        .with_context(|| format!("writing {}", txt.display()))?;
+    write_bytes(&txt, format!("{:#010x}\n", run.view.crc))?;
     Ok(run)
 }
 

@@ -384,10 +384,8 @@ pub fn save_snapshot<const V: usize, const B: usize, const C: usize>(
     let n = map
         .write_snapshot(&mut buf)
         .map_err(|e| anyhow!("{}: snapshot: {e:?}", path.display()))?;
-    if let Some(dir) = path.parent() {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
-    std::fs::write(path, &buf[..n]).with_context(|| format!("writing {}", path.display()))
+    // Atomically: a crash or kill while saving leaves the previous map file intact.
+    crate::output::atomic::write_bytes(path, &buf[..n])
 }
 
 /// Reads a map snapshot file into a heap map of the evaluation's capacity.

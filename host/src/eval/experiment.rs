@@ -679,7 +679,7 @@ impl Experiment {
         let mut written = Vec::new();
         let mut put = |name: &str, text: &str| -> Result<()> {
             let p = out.join(name);
-            std::fs::write(&p, text).with_context(|| format!("writing {}", p.display()))?;
+            crate::output::atomic::write_bytes(&p, text)?;
             written.push(p);
             Ok(())
         };

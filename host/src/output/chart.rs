@@ -20,6 +20,11 @@ use std::path::Path;
 /// # std::fs::remove_dir_all(&dir).unwrap();
 /// ```
 pub fn iou_bars(path: &Path, title: &str, series: &[(&str, &[Option<f64>; 41])]) -> Result<()> {
+    crate::output::atomic::write_atomic(path, |tmp| iou_bars_to(tmp, title, series))
+}
+
+/// What [`iou_bars`] writes, into `path` directly.
+fn iou_bars_to(path: &Path, title: &str, series: &[(&str, &[Option<f64>; 41])]) -> Result<()> {
     let classes: Vec<usize> = (1..=40)
         .filter(|&c| series.iter().any(|(_, s)| s[c].is_some()))
         .collect();
@@ -106,6 +111,11 @@ pub type LabelledSeries = [(String, Vec<(f64, f64, String)>)];
 /// # std::fs::remove_dir_all(&dir).unwrap();
 /// ```
 pub fn rate_vs_miou(path: &Path, title: &str, series: &LabelledSeries) -> Result<()> {
+    crate::output::atomic::write_atomic(path, |tmp| rate_vs_miou_to(tmp, title, series))
+}
+
+/// What [`rate_vs_miou`] writes, into `path` directly.
+fn rate_vs_miou_to(path: &Path, title: &str, series: &LabelledSeries) -> Result<()> {
     let all = series.iter().flat_map(|(_, p)| p.iter());
     let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, 0f64, f64::INFINITY, 0f64);
     for (x, y, _) in all {

@@ -96,6 +96,11 @@ pub fn write_points(path: &Path, es: &[Ellipsoid]) -> Result<()> {
 /// # std::fs::remove_file(&path).unwrap();
 /// ```
 pub fn write_ellipsoids(path: &Path, es: &[Ellipsoid], sigmas: f32) -> Result<()> {
+    crate::output::atomic::write_atomic(path, |tmp| write_ellipsoids_to(tmp, es, sigmas))
+}
+
+/// What [`write_ellipsoids`] writes, into `path` directly.
+fn write_ellipsoids_to(path: &Path, es: &[Ellipsoid], sigmas: f32) -> Result<()> {
     let (sphere, faces) = unit_sphere();
     let file =
         std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;

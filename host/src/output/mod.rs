@@ -1,6 +1,7 @@
 //! Everything sndt writes for people and other tools: PNG pictures, SVG charts, PLY
 //! point clouds and ellipsoid meshes, raw world points for other mappers.
 
+pub mod atomic;
 pub mod chart;
 pub mod export;
 pub mod picture;

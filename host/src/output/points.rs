@@ -104,6 +104,16 @@ impl fmt::Display for PointsSummary {
 /// # std::fs::remove_file(&out).unwrap();
 /// ```
 pub fn write_points(data: &dyn Dataset, ids: &[FrameId], out: &Path) -> Result<PointsSummary> {
+    let mut summary = None;
+    crate::output::atomic::write_atomic(out, |tmp| {
+        summary = Some(write_points_to(data, ids, tmp)?);
+        Ok(())
+    })?;
+    summary.ok_or_else(|| anyhow::anyhow!("{}: nothing written", out.display()))
+}
+
+/// What [`write_points`] writes, into `out` directly.
+fn write_points_to(data: &dyn Dataset, ids: &[FrameId], out: &Path) -> Result<PointsSummary> {
     let shown = out.display();
     let count = u32::try_from(ids.len()).context("too many frames")?;
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {

@@ -4,33 +4,37 @@
 use super::msgs::{self, CameraInfo, Header, Image, TfMessage, Time, Transform, TransformStamped};
 use crate::dataset::frame::{Frame, Rays};
 use crate::dataset::prepared::{depth_to_mm, Extrinsics};
+use crate::output::atomic::{commit, temporary};
 use anyhow::{anyhow, bail, Context, Result};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashMap};
 use std::fs::File;
 use std::io::BufWriter;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-/// An MCAP file of ROS 2 messages.
+/// An MCAP file of ROS 2 messages, written into a temporary file that [`BagWriter::finish`]
+/// syncs and renames over the target (a crash never leaves a truncated bag in its place).
 pub struct BagWriter {
     writer: mcap::Writer<BufWriter<File>>,
     channels: HashMap<String, u16>,
     sequence: u32,
+    tmp: PathBuf,
+    path: PathBuf,
 }
 
 impl BagWriter {
-    /// Creates `path` (and its directory).
+    /// Starts writing `path` (its directory is created).
     pub fn create(path: &Path) -> Result<BagWriter> {
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        }
-        let file = File::create(path).with_context(|| format!("creating {}", path.display()))?;
+        let tmp = temporary(path)?;
+        let file = File::create(&tmp).with_context(|| format!("creating {}", path.display()))?;
         let writer = mcap::Writer::new(BufWriter::new(file))
             .with_context(|| format!("writing {}", path.display()))?;
         Ok(BagWriter {
             writer,
             channels: HashMap::new(),
             sequence: 0,
+            tmp,
+            path: path.to_path_buf(),
         })
     }
 
@@ -65,10 +69,17 @@ impl BagWriter {
         Ok(())
     }
 
-    /// Finishes the file (summary, footer).
+    /// Finishes the file (summary, footer) and puts it in place.
     pub fn finish(mut self) -> Result<()> {
-        self.writer.finish()?;
-        Ok(())
+        let shown = self.path.display().to_string();
+        self.writer
+            .finish()
+            .with_context(|| format!("writing {shown}"))?;
+        self.writer
+            .into_inner()
+            .into_inner()
+            .map_err(|e| anyhow!("writing {shown}: {}", e.error()))?;
+        commit(&self.tmp, &self.path)
     }
 }
 
