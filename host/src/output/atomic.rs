@@ -6,7 +6,7 @@
 
 use anyhow::{Context, Result};
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -95,18 +95,4 @@ pub fn write_bytes(path: &Path, bytes: impl AsRef<[u8]>) -> Result<()> {
 /// the previous file is still whole).
 fn write_pause_ms() -> Option<u64> {
     std::env::var("SNDT_WRITE_PAUSE_MS").ok()?.parse().ok()
-}
-
-/// [`write_atomic`] through a buffered writer.
-pub fn write_with(
-    path: &Path,
-    write: impl FnOnce(&mut BufWriter<File>) -> Result<()>,
-) -> Result<()> {
-    write_atomic(path, |tmp| {
-        let file = File::create(tmp).with_context(|| format!("creating {}", path.display()))?;
-        let mut w = BufWriter::new(file);
-        write(&mut w)?;
-        w.flush()
-            .with_context(|| format!("writing {}", path.display()))
-    })
 }
