@@ -196,6 +196,9 @@ static void query_checks(const sndt_map *map, const sndt_pose *pose) {
     EXPECT(sndt_render(map, pose, &cam, 5, labels, distance, 2 * W), SNDT_ERR_BAD_ARG);
     EXPECT(sndt_render(map, pose, &cam, 0, NULL, distance, W * H), SNDT_ERR_NULL);
     EXPECT(sndt_render(map, pose, &cam, 0, labels, (float *)(labels + 1), 4), SNDT_ERR_BAD_ARG);
+    /* Overlapping buffers (aligned, so only the overlap is wrong): refused. */
+    EXPECT(sndt_render(map, pose, &cam, 0, (uint8_t *)distance, distance, W * H), SNDT_ERR_BAD_ARG);
+    EXPECT(sndt_render(map, pose, &cam, 0, labels, (float *)storage, W * H), SNDT_ERR_BAD_ARG);
 }
 
 static void snapshot_checks(sndt_map *map) {
@@ -214,6 +217,8 @@ static void snapshot_checks(sndt_map *map) {
     EXPECT(sndt_load(map, snapshot, len - 1), SNDT_ERR_CORRUPT);
     EXPECT(sndt_load(map, snapshot, 0), SNDT_ERR_CORRUPT);
     EXPECT(sndt_load(map, NULL, len), SNDT_ERR_NULL);
+    EXPECT(sndt_save(map, storage + 64, len, &written), SNDT_ERR_BAD_ARG); /* into the map */
+    EXPECT(sndt_load(map, storage + 64, len), SNDT_ERR_BAD_ARG);
     snapshot[8] ^= 0x7F; /* the version */
     EXPECT(sndt_load(map, snapshot, len), SNDT_ERR_CORRUPT);
     snapshot[8] ^= 0x7F;

@@ -51,7 +51,8 @@ typedef enum sndt_status {
   SNDT_ERR_NULL = 1,
   /**
    * An argument is out of range or inconsistent: NaN or infinite values, a pose whose
-   * rotation is not one, a bad camera, image sizes that disagree, a misaligned pointer.
+   * rotation is not one, a bad camera, image sizes that disagree, a misaligned pointer,
+   * an output buffer that overlaps another buffer of the call or the map.
    */
   SNDT_ERR_BAD_ARG = 2,
   /**

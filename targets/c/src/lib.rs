@@ -157,6 +157,31 @@ unsafe fn slice_mut<'a, T>(p: *mut T, len: usize) -> Result<&'a mut [T], sndt_st
     Ok(unsafe { core::slice::from_raw_parts_mut(p, len) })
 }
 
+/// The bytes `[start, end)` that `len` values of `T` at `p` occupy (empty for NULL).
+fn span<T>(p: *const T, len: usize) -> (usize, usize) {
+    let start = p as usize;
+    let bytes = len.saturating_mul(size_of::<T>());
+    if p.is_null() {
+        (0, 0)
+    } else {
+        (start, start.saturating_add(bytes))
+    }
+}
+
+/// `SNDT_ERR_BAD_ARG` unless every buffer the call writes is disjoint from every other
+/// buffer it writes and from every buffer it reads (Rust's references must not alias a
+/// mutable one; a C caller could pass overlapping pointers).
+fn disjoint(writes: &[(usize, usize)], reads: &[(usize, usize)]) -> Result<(), sndt_status> {
+    let overlap = |a: &(usize, usize), b: &(usize, usize)| a.0 < b.1 && b.0 < a.1;
+    for (i, w) in writes.iter().enumerate() {
+        let others = writes.iter().skip(i + 1).chain(reads);
+        if others.clone().any(|o| overlap(w, o)) {
+            return Err(SNDT_ERR_BAD_ARG);
+        }
+    }
+    Ok(())
+}
+
 /// `*p`, or `SNDT_ERR_NULL`.
 ///
 /// # Safety
@@ -410,6 +435,16 @@ pub unsafe extern "C" fn sndt_integrate_depth(
             1 => DepthKind::Range,
             _ => return Err(SNDT_ERR_BAD_ARG),
         };
+        let inputs = [
+            span(f.depth_m, n),
+            span(f.depth_mm, n),
+            span(f.labels, n),
+            span(f.labels_topk, n),
+        ];
+        disjoint(
+            &[span(map as *const u8, MAP_BYTES), span(report, 1)],
+            &inputs,
+        )?;
         let image = DepthImage {
             camera,
             depth,
@@ -417,8 +452,9 @@ pub unsafe extern "C" fn sndt_integrate_depth(
             labels,
             stride: f.stride,
         };
-        // SAFETY: the caller's promises for `map` and `report`; `report` is checked before
-        // the map changes, so an error leaves both as they were.
+        // SAFETY: the caller's promises for `map` and `report` (disjoint from the inputs
+        // and each other: checked); `report` is checked before the map changes, so an
+        // error leaves both as they were.
         let s = unsafe { storage_mut(map) }?;
         unsafe { write_opt(report, sndt_frame_report::default()) }?;
         let r = s.map.integrate_depth(&pose, &image)?;
@@ -459,7 +495,11 @@ pub unsafe extern "C" fn sndt_integrate_points(
                 slice(points as *const LabeledPoint, count)?,
             )
         };
-        // SAFETY: the caller's promises.
+        disjoint(
+            &[span(map as *const u8, MAP_BYTES), span(report, 1)],
+            &[span(points, count)],
+        )?;
+        // SAFETY: the caller's promises; the buffers are disjoint (checked).
         let s = unsafe { storage_mut(map) }?;
         unsafe { write_opt(report, sndt_frame_report::default()) }?;
         let r = s.map.integrate(&pose, pts)?;
@@ -563,7 +603,9 @@ pub unsafe extern "C" fn sndt_render(
         // SAFETY: the caller's promises.
         let (s, pose, camera) = unsafe { (storage(map)?, read(pose)?, read(camera)?) };
         let pose = pose.to_isometry()?;
-        // SAFETY: the caller's promises; the two buffers are distinct by type.
+        let outputs = [span(labels, pixels), span(distance, pixels)];
+        disjoint(&outputs, &[span(map as *const u8, MAP_BYTES)])?;
+        // SAFETY: the caller's promises; the two buffers and the map are disjoint (checked).
         let (labels, distance) =
             unsafe { (slice_mut(labels, pixels)?, slice_mut(distance, pixels)?) };
         s.map
@@ -599,7 +641,11 @@ pub unsafe extern "C" fn sndt_save(
     written: *mut usize,
 ) -> sndt_status {
     status(|| {
-        // SAFETY: the caller's promises.
+        disjoint(
+            &[span(buf, capacity), span(written, 1)],
+            &[span(map as *const u8, MAP_BYTES)],
+        )?;
+        // SAFETY: the caller's promises; the buffer and the map are disjoint (checked).
         let (s, buf) = unsafe { (storage(map)?, slice_mut(buf, capacity)?) };
         if s.map.snapshot_len() > buf.len() {
             return Err(SNDT_ERR_BUFFER_TOO_SMALL);
@@ -618,7 +664,8 @@ pub unsafe extern "C" fn sndt_save(
 #[no_mangle]
 pub unsafe extern "C" fn sndt_load(map: *mut sndt_map, buf: *const u8, len: usize) -> sndt_status {
     status(|| {
-        // SAFETY: the caller's promises.
+        disjoint(&[span(map as *const u8, MAP_BYTES)], &[span(buf, len)])?;
+        // SAFETY: the caller's promises; the snapshot is not inside the map (checked).
         let buf = unsafe { slice(buf, len) }?;
         let s = unsafe { storage_mut(map) }?;
         s.map.read_snapshot(buf).map_err(sndt_status::from)
@@ -674,7 +721,7 @@ pub extern "C" fn sndt_status_str(status: i32) -> *const core::ffi::c_char {
         Some(SNDT_OK) => c"ok",
         Some(SNDT_ERR_NULL) => c"a required pointer is NULL",
         Some(SNDT_ERR_BAD_ARG) => {
-            c"bad argument (NaN/inf, invalid pose or camera, sizes that disagree, misaligned pointer)"
+            c"bad argument (NaN/inf, invalid pose or camera, sizes that disagree, misaligned or overlapping buffers)"
         }
         Some(SNDT_ERR_CONFIG) => c"a configuration field is out of range",
         Some(SNDT_ERR_CAPACITY) => {

@@ -16,7 +16,8 @@ pub enum sndt_status {
     /// A required pointer is NULL.
     SNDT_ERR_NULL = 1,
     /// An argument is out of range or inconsistent: NaN or infinite values, a pose whose
-    /// rotation is not one, a bad camera, image sizes that disagree, a misaligned pointer.
+    /// rotation is not one, a bad camera, image sizes that disagree, a misaligned pointer,
+    /// an output buffer that overlaps another buffer of the call or the map.
     SNDT_ERR_BAD_ARG = 2,
     /// A configuration field is out of its documented range.
     SNDT_ERR_CONFIG = 3,
