@@ -12,7 +12,7 @@ use std::path::PathBuf;
 #[derive(clap::Args, Clone, Debug)]
 pub struct BudgetArgs {
     /// Voxel edge in metres.
-    #[arg(long, default_value_t = 0.10)]
+    #[arg(long, default_value_t = 0.10, value_parser = super::parse::positive)]
     pub cell: f32,
     /// Classes K.
     #[arg(long, default_value_t = 40)]
@@ -30,7 +30,7 @@ pub struct BudgetArgs {
     #[arg(long)]
     pub split: Option<String>,
     /// Use every stride-th pixel of the dataset frames.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     pub stride: u32,
 }
 

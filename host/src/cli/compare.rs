@@ -31,7 +31,7 @@ pub struct CompareArgs {
     #[arg(long, value_enum, default_value_t = LabelArg::Gt)]
     pub labels: LabelArg,
     /// Integrate every stride-th pixel in both directions (rendering uses all pixels).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     pub stride: u32,
     /// Split of the prepared layout.
     #[arg(long)]

@@ -22,7 +22,7 @@ pub struct DemoArgs {
     #[arg(long, default_value = "out/demo")]
     pub out: PathBuf,
     /// Voxel edge in metres.
-    #[arg(long, default_value_t = 0.10)]
+    #[arg(long, default_value_t = 0.10, value_parser = super::parse::positive)]
     pub cell: f32,
     /// Synthetic scenes (kinds cycle: living, bedroom, kitchen, office, bathroom, open plan).
     #[arg(long, default_value_t = 2)]

@@ -66,10 +66,10 @@ pub struct ExperimentArgs {
     #[arg(long, value_enum, default_value = "both")]
     pub labels: ExperimentLabels,
     /// Cell sizes, metres.
-    #[arg(long, value_delimiter = ',', default_value = "0.05,0.1,0.15,0.2")]
+    #[arg(long, value_delimiter = ',', default_value = "0.05,0.1,0.15,0.2", value_parser = super::parse::positive)]
     pub cells: Vec<f32>,
     /// Kernel lengths of S-BKI and OS-BKI, metres.
-    #[arg(long, value_delimiter = ',', default_value = "0.1,0.2,0.3,0.4")]
+    #[arg(long, value_delimiter = ',', default_value = "0.1,0.2,0.3,0.4", value_parser = super::parse::positive)]
     pub kernels: Vec<f32>,
     /// Methods.
     #[arg(

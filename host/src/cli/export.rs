@@ -32,16 +32,16 @@ pub struct ExportArgs {
     #[arg(long)]
     pub mcap: Option<PathBuf>,
     /// With a dataset and --mcap: write the map every N frames, not only at the end.
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse::at_least_one)]
     pub every: Option<usize>,
     /// With --mcap: the frame the map frame `sndt_map` is attached to.
     #[arg(long, default_value = "world")]
     pub world_frame: String,
     /// Ellipsoid meshes at this many standard deviations instead of points at the means.
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse::positive)]
     pub ellipsoids: Option<f32>,
     /// Voxel edge in metres (when mapping a dataset).
-    #[arg(long, default_value_t = 0.10)]
+    #[arg(long, default_value_t = 0.10, value_parser = super::parse::positive)]
     pub cell: f32,
     /// Labels fed to the map (when mapping a dataset).
     #[arg(long, value_enum, default_value = "gt")]
@@ -56,6 +56,9 @@ pub struct ExportArgs {
 pub fn run(a: &ExportArgs) -> Result<()> {
     let path = Path::new(&a.input);
     let is_snapshot = path.is_file() && path.extension().is_none_or(|e| e != "mcap");
+    if path.extension().is_some_and(|e| e == "sndt") && !path.is_file() {
+        anyhow::bail!("{}: no such map snapshot file", path.display());
+    }
     if a.every == Some(0) {
         anyhow::bail!("--every 0: give a number of frames of at least 1");
     }

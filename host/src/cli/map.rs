@@ -17,7 +17,7 @@ pub struct MapArgs {
     /// Dataset directory (prepared layout or raw Hypersim), or `synthetic[:SCENES:FRAMES]`.
     pub dataset: String,
     /// Voxel edge in metres.
-    #[arg(long, default_value_t = 0.10)]
+    #[arg(long, default_value_t = 0.10, value_parser = super::parse::positive)]
     pub cell: f32,
     /// Labels fed to the map.
     #[arg(long, value_enum, default_value = "gt")]
@@ -30,7 +30,7 @@ pub struct MapArgs {
     #[command(flatten)]
     pub open: OpenArgs,
     /// Use every stride-th pixel when mapping.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     pub stride: u32,
     /// About how many votes a voxel takes from one frame (1..=64; `Config::votes_per_frame`).
     #[arg(long, default_value_t = Config::DEFAULT.votes_per_frame)]
@@ -44,7 +44,7 @@ pub struct MapArgs {
     pub mcap: Option<PathBuf>,
     /// With --mcap: write the map every N frames as well, so the bag plays back as a
     /// growing map.
-    #[arg(long)]
+    #[arg(long, value_parser = super::parse::at_least_one)]
     pub every: Option<usize>,
 }
 

@@ -15,6 +15,7 @@ pub mod info;
 pub mod labels;
 pub mod map;
 pub mod open_args;
+pub mod parse;
 pub mod points;
 pub mod synth;
 pub mod testvector;

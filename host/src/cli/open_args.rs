@@ -38,7 +38,7 @@ pub struct OpenArgs {
     pub camera_info_topic: Option<String>,
     /// ROS 2 bag: largest stamp difference (seconds) of labels or camera info paired with a
     /// depth image (0: exact stamps).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = super::parse::non_negative)]
     pub sync_tolerance: f64,
 }
 

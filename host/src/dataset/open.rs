@@ -42,6 +42,9 @@ pub fn open(root: &Path, options: &OpenOptions) -> Result<Box<dyn Dataset>> {
         }
         return Ok(Box::new(bag));
     }
+    if !root.exists() {
+        bail!("{}: no such file or directory", root.display());
+    }
     if !root.is_dir() {
         bail!("{}: not a directory", root.display());
     }

@@ -1,0 +1,50 @@
+//! Value parsers for options, so that a bad value is refused where it is parsed, with the
+//! option's name and the reason (clap prints `invalid value 'X' for '--cell <CELL>': ...`
+//! and exits with status 2).
+
+/// A finite number greater than 0 (sizes, lengths, standard deviations).
+///
+/// ```
+/// use sndt_host::cli::parse::positive;
+/// assert_eq!(positive("0.1"), Ok(0.1));
+/// for bad in ["0", "-3", "NaN", "inf", "x"] {
+///     assert!(positive(bad).is_err(), "{bad}");
+/// }
+/// ```
+pub fn positive(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        Ok(_) => Err("must be a finite number > 0".into()),
+        Err(_) => Err("not a number".into()),
+    }
+}
+
+/// A finite number of at least 0 (tolerances).
+///
+/// ```
+/// use sndt_host::cli::parse::non_negative;
+/// assert_eq!(non_negative("0"), Ok(0.0));
+/// assert!(non_negative("-0.5").is_err() && non_negative("inf").is_err());
+/// ```
+pub fn non_negative(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        Ok(_) => Err("must be a finite number >= 0".into()),
+        Err(_) => Err("not a number".into()),
+    }
+}
+
+/// A whole number of at least 1 (counts of frames).
+///
+/// ```
+/// use sndt_host::cli::parse::at_least_one;
+/// assert_eq!(at_least_one("3"), Ok(3));
+/// assert!(at_least_one("0").is_err() && at_least_one("-1").is_err());
+/// ```
+pub fn at_least_one(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(v) if v >= 1 => Ok(v),
+        Ok(_) => Err("must be at least 1, not 0".into()),
+        Err(_) => Err("not a whole number >= 1".into()),
+    }
+}
