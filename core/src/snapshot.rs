@@ -521,19 +521,23 @@ fn sums_possible(n: i64, s1: &[i64; 3], s2: &[i64; 6], qhalf: i64) -> bool {
         return false;
     }
     // Sums of real points give a positive semi-definite scatter matrix
-    // M = n S2 - S1 S1^T. Decay rounds each scaled sum on its own, which can push M
-    // below that by about n (qhalf + 1/2) per entry (and new points can at most
-    // double it before the next decay), so allow a slack of 2 n (qhalf + 1):
-    // anything beyond cannot come from this map.
+    // M = n S2 - S1 S1^T. Decay rounds each scaled sum on its own, which can move every
+    // entry of M by about n (qhalf + 1/2) (and new points can at most double that before
+    // the next decay), so each entry may be off by a slack of 2 n (qhalf + 1). The stored
+    // M must then be within the slack of a PSD matrix: diagonals at least -slack, and each
+    // off-diagonal, shrunk by the slack, within the geometric mean of the grown diagonals.
+    // Anything beyond cannot come from this map.
     let m = scatter(n, s1, s2).map(|x| x as i128);
     let slack = 2 * n as i128 * (qhalf as i128 + 1);
     let (dx, dy, dz) = (m[0] + slack, m[3] + slack, m[5] + slack);
+    let off = |x: i128| (x.abs() - slack).max(0);
+    let (mxy, mxz, myz) = (off(m[1]), off(m[2]), off(m[4]));
     !(dx < 0
         || dy < 0
         || dz < 0
-        || m[1] * m[1] > dx * dy
-        || m[2] * m[2] > dx * dz
-        || m[4] * m[4] > dy * dz)
+        || mxy * mxy > dx * dy
+        || mxz * mxz > dx * dz
+        || myz * myz > dy * dz)
 }
 
 #[cfg(test)]

@@ -262,3 +262,74 @@ proptest! {
         prop_assert_eq!(snapshot(&copy), snap);
     }
 }
+
+/// Found by `garbage_never_panics`: a map with 75 m cells and `n_max` 3, decayed twice,
+/// whose own snapshot was refused as `SnapshotCorrupt`: decay's rounding had moved an
+/// off-diagonal of the scatter matrix beyond the reader's check, which allowed slack on
+/// the diagonals only.
+#[test]
+fn a_huge_cell_map_snapshot_reads_back() {
+    use sndt_core::{Quaternion, Translation3, UnitQuaternion};
+    let cfg = Config {
+        cell_size: 74.703865,
+        quant_bits: 4,
+        n_min: 3,
+        eigen_ratio: 0.001,
+        n_max: 3,
+        hit: 0.0,
+        miss: 0.0,
+        clamp_min: 0.0,
+        clamp_max: 0.0,
+        lambda: 0.0,
+        noise_base: 0.02,
+        noise_quadratic: 0.0025,
+        max_range: 32.972782,
+        top_k: 1,
+        min_score: 0,
+        votes_per_frame: 64,
+        miss_model: sndt_core::MissModel::NdtOm,
+        render_radius: 2.5,
+    };
+    let pose = |q: [f32; 4], t: [f32; 3]| {
+        let q = UnitQuaternion::new_unchecked(Quaternion::new(q[3], q[0], q[1], q[2]));
+        Isometry3::from_parts(Translation3::new(t[0], t[1], t[2]), q)
+    };
+    let p = |x: f32, y: f32, z: f32| LabeledPoint::new(Point3::new(x, y, z), Labels::NONE);
+    let frames = [
+        (
+            pose(
+                [-0.094090104, 0.819113, 0.5656788, -0.014433165],
+                [1.0446955, 2.383615, -1.9392056],
+            ),
+            vec![
+                p(0.0, 0.0, 1.8180071),
+                p(-1.7327003, 0.0, -1.0265286),
+                p(-3.452669, 0.0, 0.0),
+                p(-0.90857035, 0.0, 0.0),
+                p(0.0, 0.0, 1e-7),
+            ],
+        ),
+        (
+            pose(
+                [0.24558431, 0.25668985, -0.7341134, 0.57868487],
+                [0.0, -1.1628203, 0.0],
+            ),
+            vec![
+                p(0.0, 0.0, -2.6370633),
+                p(0.0, 0.0, -2.3874147),
+                p(-2.3801415, 0.0, -2.7705739),
+            ],
+        ),
+    ];
+    let mut map: Small = Map::try_new(cfg).unwrap();
+    for (pose, pts) in &frames {
+        assert_eq!(
+            map.integrate(pose, pts).unwrap().points_used,
+            pts.len() as u32
+        );
+    }
+    let snap = snapshot(&map);
+    let mut copy: Small = Map::new(Config::DEFAULT);
+    copy.read_snapshot(&snap).unwrap();
+    assert_eq!(snapshot(&copy), snap);
+}
