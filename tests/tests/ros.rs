@@ -70,6 +70,22 @@ fn a_bag_gives_the_prepared_layouts_frames_and_map() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The camera's pose in the world on `/tf` at `stamp`.
+fn write_camera_tf(bag: &mut BagWriter, stamp: msgs::Time, pose: &sndt_core::Isometry3<f32>) {
+    let tf = TransformStamped {
+        header: Header {
+            stamp,
+            frame_id: names::WORLD.into(),
+        },
+        child_frame_id: names::CAMERA.into(),
+        transform: camera_transform(pose),
+    };
+    let msg = TfMessage {
+        transforms: vec![tf],
+    };
+    bag.write("/tf", stamp, &msg).unwrap();
+}
+
 /// A bag of 3 synthetic frames written by hand: depth images of `encoding`, the last
 /// frame's `/tf` left out when `gap` is set, camera info only `with_info`.
 fn custom_bag(path: &std::path::Path, encoding: &str, gap: bool, with_info: bool) {
@@ -92,22 +108,7 @@ fn custom_bag(path: &std::path::Path, encoding: &str, gap: bool, with_info: bool
             frame_id: names::CAMERA.into(),
         };
         if !(gap && k == 2) {
-            let tf = TransformStamped {
-                header: Header {
-                    stamp,
-                    frame_id: names::WORLD.into(),
-                },
-                child_frame_id: names::CAMERA.into(),
-                transform: camera_transform(&f.pose),
-            };
-            bag.write(
-                "/tf",
-                stamp,
-                &TfMessage {
-                    transforms: vec![tf],
-                },
-            )
-            .unwrap();
+            write_camera_tf(&mut bag, stamp, &f.pose);
         }
         if with_info {
             bag.write(
@@ -459,22 +460,7 @@ fn one_frame_bag(path: &std::path::Path, depth_topic: &str, offset_ns: u64, d: f
         stamp: msgs::Time::from_nanos(ns),
         frame_id: names::CAMERA.into(),
     };
-    let tf = TransformStamped {
-        header: Header {
-            stamp,
-            frame_id: names::WORLD.into(),
-        },
-        child_frame_id: names::CAMERA.into(),
-        transform: camera_transform(&f.pose),
-    };
-    bag.write(
-        "/tf",
-        stamp,
-        &TfMessage {
-            transforms: vec![tf],
-        },
-    )
-    .unwrap();
+    write_camera_tf(&mut bag, stamp, &f.pose);
     let mut info = camera_info(header(stamp.nanos()), &cam);
     info.d = vec![d, 0.0, 0.0, 0.0, 0.0];
     bag.write(names::CAMERA_INFO, stamp, &info).unwrap();
