@@ -5,7 +5,8 @@
 # the map and prints the snapshot CRC, the view's CRC and the peak stack; this script checks
 # both CRCs against the host's (`sndt testvector --check`, x86-64) and expected_crc.txt /
 # expected_render_crc.txt, and that static RAM + peak stack fit the RAM of memory.x. Exits
-# non-zero if anything fails, including the firmware's own checks. Installs
+# non-zero if anything fails, including the firmware's own checks and a panic call site
+# of sndt-core in the ELF (scripts/panic-sites.sh). Installs
 # what it needs when missing (idempotent; fast when everything is present).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -59,6 +60,9 @@ if ((flash > FLASH_BUDGET || ram > RAM_BUDGET)); then
     echo "error: firmware exceeds its memory budget" >&2
     exit 1
 fi
+
+step "panic call sites: none may come from sndt-core"
+bash scripts/panic-sites.sh "$ELF"
 
 step "run firmware under QEMU (mps2-an386, Cortex-M4F)"
 # -icount shift=0: one instruction per virtual nanosecond, so the firmware's SysTick

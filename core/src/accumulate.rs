@@ -45,8 +45,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         };
         self.accumulate_point(f, vs, key.packed(), q);
         let classes = voting_classes(labels, &self.config);
-        if !classes.is_empty() {
-            self.voxels.slots[vs].vote(&p, &classes);
+        if let (false, Some(v)) = (classes.is_empty(), self.voxels.get_mut(vs)) {
+            v.vote(&p, &classes);
         }
         f.report.points_used += 1;
     }
@@ -58,7 +58,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let bs = self.frame_block(f, key.block(), true)?;
         let bit = 1u64 << key.cell();
         let packed = key.packed();
-        let vs = if self.blocks.slots[bs].hit & bit == 0 {
+        let vs = if self.blocks.get(bs)?.hit & bit == 0 {
             self.first_point(f, bs, key)?
         } else if f.voxel_cache.0 == packed {
             f.voxel_cache.1
@@ -74,7 +74,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// room in its histogram for this frame's votes.
     fn first_point(&mut self, f: &mut FrameState, bs: usize, key: &VoxelKey) -> Option<usize> {
         let bit = 1u64 << key.cell();
-        let vs = if self.blocks.slots[bs].surface & bit != 0 {
+        let vs = if self.blocks.get(bs)?.surface & bit != 0 {
             self.voxels.find(key.packed())
         } else {
             None
@@ -83,10 +83,12 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             Some(vs) => vs,
             None => self.create_voxel(f, key)?,
         };
-        let b = &mut self.blocks.slots[bs];
+        let b = self.blocks.get_mut(bs)?;
         b.hit |= bit;
         b.surface |= bit;
-        self.voxels.slots[vs].make_vote_room(self.config.votes_per_frame);
+        self.voxels
+            .get_mut(vs)?
+            .make_vote_room(self.config.votes_per_frame);
         Some(vs)
     }
 
@@ -177,9 +179,12 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             y: k[1],
             z: k[2],
         };
-        match self.frame_block(f, key.block(), true) {
-            Some(bs) => {
-                self.blocks.slots[bs].far |= 1u64 << key.cell();
+        match self
+            .frame_block(f, key.block(), true)
+            .and_then(|bs| self.blocks.get_mut(bs))
+        {
+            Some(b) => {
+                b.far |= 1u64 << key.cell();
                 f.report.truncated += 1;
             }
             None => f.report.dropped_points += 1,

@@ -160,7 +160,9 @@ impl Batch {
             let y = rays.y(row);
             let end = self.put_depth_row(&image.depth, first, stride, (&xs, n), y, start);
             self.len = end;
-            let votes = &mut self.vote[start..end];
+            let Some(votes) = self.vote.get_mut(start..end) else {
+                break;
+            };
             match image.labels {
                 LabelImage::Top1(l) => {
                     let l = l.get(first..).unwrap_or(&[]);

@@ -91,7 +91,9 @@ impl Block {
     #[inline]
     pub(crate) fn add_logodds(&mut self, cell: u32, delta: i32, lo: i32, hi: i32) {
         let c = &mut self.cells[(cell & 63) as usize];
-        *c = (*c as i32 + delta).clamp(lo, hi) as i16;
+        // max then min, not clamp: clamp panics when lo > hi, and a halt is worse than a
+        // clamp to hi (the config validation keeps lo < hi anyway).
+        *c = (*c as i32 + delta).max(lo).min(hi) as i16;
     }
 }
 

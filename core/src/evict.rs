@@ -19,10 +19,9 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let c = center.block();
         let dist = |b: &Block| block_distance(b.packed_key(), c);
         let mut hist = [0u32; DISTANCE_BINS];
-        for s in self.blocks.live() {
-            let b = &self.blocks.slots[s];
+        for b in self.blocks.slots.iter().filter(|b| b.packed_key() != 0) {
             if b.stamp != stamp {
-                hist[bin(dist(b))] += 1;
+                add(&mut hist, dist(b));
             }
         }
         let Some(threshold) = threshold(&hist, B) else {
@@ -30,7 +29,9 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         };
         let mut evicted = 0;
         for s in 0..B {
-            let b = self.blocks.slots[s];
+            let Some(&b) = self.blocks.get(s) else {
+                break;
+            };
             if b.packed_key() == 0 || b.stamp == stamp || bin(dist(&b)) < threshold {
                 continue;
             }
@@ -52,10 +53,10 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// occupancy stays in the block layer. Returns how many went.
     pub(crate) fn evict_voxels(&mut self, center: &VoxelKey, stamp: u16) -> u32 {
         let mut hist = [0u32; DISTANCE_BINS];
-        for s in self.voxels.live() {
-            let key = self.voxels.slots[s].voxel_key();
+        for v in self.voxels.slots.iter().filter(|v| v.packed_key() != 0) {
+            let key = v.voxel_key();
             if !self.hit_this_frame(&key, stamp) {
-                hist[bin(key.chebyshev(center))] += 1;
+                add(&mut hist, key.chebyshev(center));
             }
         }
         let Some(threshold) = threshold(&hist, V) else {
@@ -63,7 +64,9 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         };
         let mut evicted = 0;
         for s in 0..V {
-            let v = &self.voxels.slots[s];
+            let Some(v) = self.voxels.get(s) else {
+                break;
+            };
             if v.packed_key() == 0 {
                 continue;
             }
@@ -72,8 +75,9 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 continue;
             }
             self.voxels.remove(s);
-            if let Some(b) = self.blocks.find(key.block()) {
-                self.blocks.slots[b].surface &= !(1u64 << key.cell());
+            let found = self.blocks.find(key.block());
+            if let Some(b) = found.and_then(|b| self.blocks.get_mut(b)) {
+                b.surface &= !(1u64 << key.cell());
             }
             evicted += 1;
         }
@@ -82,11 +86,12 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     fn hit_this_frame(&self, key: &VoxelKey, stamp: u16) -> bool {
-        match self.blocks.find(key.block()) {
-            Some(b) => {
-                let b = &self.blocks.slots[b];
-                b.stamp == stamp && b.hit & (1u64 << key.cell()) != 0
-            }
+        match self
+            .blocks
+            .find(key.block())
+            .and_then(|b| self.blocks.get(b))
+        {
+            Some(b) => b.stamp == stamp && b.hit & (1u64 << key.cell()) != 0,
             None => false,
         }
     }
@@ -110,6 +115,13 @@ fn block_distance(a: u64, b: u64) -> u32 {
     d(32).max(d(16)).max(d(0))
 }
 
+/// Counts distance `d` in its bin of `hist`.
+fn add(hist: &mut [u32; DISTANCE_BINS], d: u32) {
+    if let Some(count) = hist.get_mut(bin(d)) {
+        *count += 1;
+    }
+}
+
 /// Eviction policy: evict every evictable entry in the farthest distance bins, taking whole
 /// bins from the far end until at least 1/16 of the capacity (at least one entry) goes.
 /// Returns the first bin to evict, or `None` when nothing is evictable.
@@ -117,9 +129,9 @@ fn threshold(hist: &[u32; DISTANCE_BINS], capacity: usize) -> Option<usize> {
     let target = (capacity / 16).max(1) as u32;
     let mut sum = 0u32;
     let mut last = None;
-    for b in (0..DISTANCE_BINS).rev() {
-        if hist[b] > 0 {
-            sum += hist[b];
+    for (b, &count) in hist.iter().enumerate().rev() {
+        if count > 0 {
+            sum += count;
             last = Some(b);
             if sum >= target {
                 break;

@@ -316,7 +316,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 bs
             }
         };
-        let b = &mut self.blocks.slots[bs];
+        let b = self.blocks.get_mut(bs)?;
         if b.touch(f.stamp) && link {
             b.frame_next = f.head;
             f.head = bs as u32 + 1;
@@ -347,8 +347,9 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
 
     /// Bottom-up merge sort of the frame's block list by packed key (no allocation).
     pub(crate) fn sort_frame_list(&mut self, head: u32) -> u32 {
-        let key = |m: &Self, i: u32| m.blocks.slots[(i - 1) as usize].packed_key();
-        let next = |m: &Self, i: u32| m.blocks.slots[(i - 1) as usize].frame_next;
+        // A damaged link ends a run (`next`) and sorts last (`key`) instead of halting.
+        let key = |m: &Self, i: u32| m.blocks.linked(i).map_or(u64::MAX, |b| b.packed_key());
+        let next = |m: &Self, i: u32| m.blocks.linked(i).map_or(NIL, |b| b.frame_next);
         let mut list = head;
         let mut insize = 1usize;
         loop {
@@ -383,17 +384,16 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                         q = next(self, q);
                         qsize -= 1;
                     }
-                    if tail == NIL {
-                        list = e;
-                    } else {
-                        self.blocks.slots[(tail - 1) as usize].frame_next = e;
+                    match self.blocks.linked_mut(tail) {
+                        Some(t) => t.frame_next = e,
+                        None => list = e,
                     }
                     tail = e;
                 }
                 p = q;
             }
-            if tail != NIL {
-                self.blocks.slots[(tail - 1) as usize].frame_next = NIL;
+            if let Some(t) = self.blocks.linked_mut(tail) {
+                t.frame_next = NIL;
             }
             if merges <= 1 {
                 return list;

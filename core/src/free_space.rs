@@ -79,8 +79,9 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         self.for_each_frame_block(head, |map, _, b| {
             for cell in bits(b.hit) {
                 let key = VoxelKey::from_block_cell(b.packed_key(), cell);
-                let target = match map.voxels.find(key.packed()) {
-                    Some(vs) => mean_in_voxel(&map.voxels.slots[vs], &key, f.qscale),
+                let found = map.voxels.find(key.packed());
+                let target = match found.and_then(|vs| map.voxels.get(vs)) {
+                    Some(v) => mean_in_voxel(v, &key, f.qscale),
                     None => centre(&key),
                 };
                 map.cast(f, &mut cache, target, &key, false);
@@ -242,7 +243,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         match at {
             Some(bs) => {
                 self.miss(f, cache, ray, &voxel, bs);
-                self.blocks.slots[bs].missed
+                self.blocks.get(bs).map_or(0, |b| b.missed)
             }
             None => {
                 f.report.dropped_misses = f.report.dropped_misses.saturating_add(1);
@@ -257,7 +258,10 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     #[inline(always)]
     fn enter_block(&mut self, f: &mut FrameState, block: u64) -> (Option<usize>, u64) {
         let at = self.frame_block(f, block, false);
-        (at, at.map_or(0, |bs| self.blocks.slots[bs].missed))
+        let missed = at
+            .and_then(|bs| self.blocks.get(bs))
+            .map_or(0, |b| b.missed);
+        (at, missed)
     }
 
     /// The miss of `voxel` (its block in slot `bs`, without a miss yet this
@@ -274,9 +278,12 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let bit = 1u64 << voxel.cell();
         let cfg = &self.config;
         let mut delta = f.miss;
-        if self.blocks.slots[bs].surface & bit != 0 && cfg.miss_model == MissModel::NdtOm {
-            if let Some(vs) = self.voxels.find(voxel.packed()) {
-                let v = &self.voxels.slots[vs];
+        let Some(surface) = self.blocks.get(bs).map(|b| b.surface) else {
+            return;
+        };
+        if surface & bit != 0 && cfg.miss_model == MissModel::NdtOm {
+            let found = self.voxels.find(voxel.packed());
+            if let Some((vs, v)) = found.and_then(|vs| Some((vs, self.voxels.get(vs)?))) {
                 if v.n >= cfg.n_min {
                     let g = cache.get(vs, || v.prepared(cfg));
                     match ndt_om_miss(cfg, ray, &g) {
@@ -287,9 +294,10 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             }
         }
         let (lo, hi) = f.clamp;
-        let b = &mut self.blocks.slots[bs];
-        b.missed |= bit;
-        b.add_logodds(voxel.cell(), delta, lo, hi);
+        if let Some(b) = self.blocks.get_mut(bs) {
+            b.missed |= bit;
+            b.add_logodds(voxel.cell(), delta, lo, hi);
+        }
     }
 }
 

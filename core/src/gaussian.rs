@@ -106,38 +106,46 @@ pub(crate) fn symmetric_eigen(m: &Matrix3<f32>) -> ([f32; 3], Matrix3<f32>) {
         if off <= diag * 1e-14 || off == 0.0 {
             break;
         }
-        for &(p, q) in &[(0usize, 1usize), (0, 2), (1, 2)] {
-            let apq = a[(p, q)];
-            if apq == 0.0 {
-                continue;
-            }
-            let theta = (a[(q, q)] - a[(p, p)]) / (2.0 * apq);
-            let sign = if theta >= 0.0 { 1.0 } else { -1.0 };
-            let t = sign / (theta.abs() + sqrt(theta * theta + 1.0));
-            let c = 1.0 / sqrt(t * t + 1.0);
-            let s = t * c;
-            // A <- J^T A J with J the rotation in the (p, q) plane.
-            for k in 0..3 {
-                let akp = a[(k, p)];
-                let akq = a[(k, q)];
-                a[(k, p)] = c * akp - s * akq;
-                a[(k, q)] = s * akp + c * akq;
-            }
-            for k in 0..3 {
-                let apk = a[(p, k)];
-                let aqk = a[(q, k)];
-                a[(p, k)] = c * apk - s * aqk;
-                a[(q, k)] = s * apk + c * aqk;
-            }
-            for k in 0..3 {
-                let vkp = v[(k, p)];
-                let vkq = v[(k, q)];
-                v[(k, p)] = c * vkp - s * vkq;
-                v[(k, q)] = s * vkp + c * vkq;
-            }
-        }
+        jacobi_rotate::<0, 1>(&mut a, &mut v);
+        jacobi_rotate::<0, 2>(&mut a, &mut v);
+        jacobi_rotate::<1, 2>(&mut a, &mut v);
     }
     ([a[(0, 0)], a[(1, 1)], a[(2, 2)]], v)
+}
+
+/// One Jacobi rotation of [`symmetric_eigen`], zeroing `a[(P, Q)]`. The plane is a const
+/// parameter so every index is a constant: no bounds check (and no panic path) remains.
+#[inline]
+fn jacobi_rotate<const P: usize, const Q: usize>(a: &mut Matrix3<f32>, v: &mut Matrix3<f32>) {
+    let (p, q) = (P, Q);
+    let apq = a[(p, q)];
+    if apq == 0.0 {
+        return;
+    }
+    let theta = (a[(q, q)] - a[(p, p)]) / (2.0 * apq);
+    let sign = if theta >= 0.0 { 1.0 } else { -1.0 };
+    let t = sign / (theta.abs() + sqrt(theta * theta + 1.0));
+    let c = 1.0 / sqrt(t * t + 1.0);
+    let s = t * c;
+    // A <- J^T A J with J the rotation in the (p, q) plane.
+    for k in 0..3 {
+        let akp = a[(k, p)];
+        let akq = a[(k, q)];
+        a[(k, p)] = c * akp - s * akq;
+        a[(k, q)] = s * akp + c * akq;
+    }
+    for k in 0..3 {
+        let apk = a[(p, k)];
+        let aqk = a[(q, k)];
+        a[(p, k)] = c * apk - s * aqk;
+        a[(q, k)] = s * apk + c * aqk;
+    }
+    for k in 0..3 {
+        let vkp = v[(k, p)];
+        let vkq = v[(k, q)];
+        v[(k, p)] = c * vkp - s * vkq;
+        v[(k, q)] = s * vkp + c * vkq;
+    }
 }
 
 #[cfg(test)]

@@ -188,12 +188,14 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         self.for_each_frame_block(head, |map, bs, b| {
             for cell in bits(b.hit) {
                 let key = VoxelKey::from_block_cell(b.packed_key(), cell);
-                if let Some(vs) = map.voxels.find(key.packed()) {
-                    let v = &mut map.voxels.slots[vs];
+                let found = map.voxels.find(key.packed());
+                if let Some(v) = found.and_then(|vs| map.voxels.get_mut(vs)) {
                     v.decay(cfg.n_max);
                     v.end_vote_sample(cfg.votes_per_frame);
                 }
-                map.blocks.slots[bs].add_logodds(cell, hit, lo, hi);
+                if let Some(b) = map.blocks.get_mut(bs) {
+                    b.add_logodds(cell, hit, lo, hi);
+                }
                 f.report.end_voxels += 1;
             }
         });

@@ -255,10 +255,12 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
 
     /// Occupancy log-odds of a voxel (natural units); 0 when unknown.
     pub fn log_odds(&self, key: &VoxelKey) -> f32 {
-        match self.blocks.find(key.block()) {
-            Some(b) => self.blocks.slots[b].cells[key.cell() as usize] as f32 / LOGODDS_ONE,
-            None => 0.0,
-        }
+        let block = self
+            .blocks
+            .find(key.block())
+            .and_then(|b| self.blocks.get(b));
+        let cell = block.and_then(|b| b.cells.get(key.cell() as usize));
+        cell.map_or(0.0, |&l| l as f32 / LOGODDS_ONE)
     }
 
     /// Occupancy state of a voxel.
@@ -269,13 +271,13 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// Most voted class (1-based) and its share of the votes, for a surface voxel.
     pub fn class(&self, key: &VoxelKey) -> Option<(u8, f32)> {
         let v = self.voxels.find(key.packed())?;
-        argmax(&self.voxels.slots[v].hist)
+        argmax(&self.voxels.get(v)?.hist)
     }
 
     /// The Gaussian of a surface voxel (any count; check `count` against `n_min`).
     pub fn gaussian(&self, key: &VoxelKey) -> Option<Gaussian> {
-        let v = self.voxels.find(key.packed())?;
-        Some(self.voxels.slots[v].gaussian(self.config.cell_size, self.config.quant_step()))
+        let v = self.voxels.get(self.voxels.find(key.packed())?)?;
+        Some(v.gaussian(self.config.cell_size, self.config.quant_step()))
     }
 
     /// The Gaussian of the surface voxel containing a world point.
@@ -285,24 +287,23 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
 
     /// Everything about one surface voxel.
     pub fn voxel(&self, key: &VoxelKey) -> Option<VoxelView<'_, C>> {
-        let v = self.voxels.find(key.packed())?;
-        Some(self.view(v))
+        self.view(self.voxels.find(key.packed())?)
     }
 
-    fn view(&self, slot: usize) -> VoxelView<'_, C> {
-        let v = &self.voxels.slots[slot];
+    fn view(&self, slot: usize) -> Option<VoxelView<'_, C>> {
+        let v = self.voxels.get(slot)?;
         let key = v.voxel_key();
-        VoxelView {
+        Some(VoxelView {
             key,
             log_odds: self.log_odds(&key),
             gaussian: v.gaussian(self.config.cell_size, self.config.quant_step()),
             histogram: &v.hist,
-        }
+        })
     }
 
     /// All surface voxels in canonical order (independent of insertion order).
     pub fn voxels(&self) -> impl Iterator<Item = VoxelView<'_, C>> + '_ {
-        self.voxels.canonical().map(move |s| self.view(s))
+        self.voxels.canonical().filter_map(move |s| self.view(s))
     }
 
     /// Every observed voxel (free or occupied) with its log-odds, block by block.
@@ -316,8 +317,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// assert_eq!(free, 10); // the voxels from the sensor to the hit
     /// ```
     pub fn cells(&self) -> impl Iterator<Item = (VoxelKey, f32)> + '_ {
-        self.blocks.canonical().flat_map(move |b| {
-            let block = &self.blocks.slots[b];
+        let blocks = self.blocks.canonical().filter_map(|b| self.blocks.get(b));
+        blocks.flat_map(move |block| {
             let packed = block.packed_key();
             block
                 .cells

@@ -458,7 +458,9 @@ pub(crate) mod tests {
         if found == 0 {
             return;
         }
-        let b = &p.blocks.slots[(found - 1) as usize];
+        let Some(b) = p.blocks.linked(found) else {
+            return;
+        };
         let cell = key.cell();
         if b.surface & (1u64 << cell) == 0 || b.cells[cell as usize] <= 0 {
             return;
@@ -466,7 +468,9 @@ pub(crate) mod tests {
         let Some(vs) = map.voxels.find(key.packed()) else {
             return;
         };
-        let v = &map.voxels.slots[vs];
+        let Some(v) = map.voxels.get(vs) else {
+            return;
+        };
         let cfg = &map.config;
         if v.n < cfg.n_min {
             return;

@@ -42,10 +42,21 @@ struct Writer<'a> {
     pos: usize,
 }
 
-impl Writer<'_> {
+impl<'a> Writer<'a> {
+    /// Appends `bytes`. Callers size the buffer first (`snapshot_len`, fixed records), so
+    /// they always fit; were they not to, they are left out instead of halting.
     fn put(&mut self, bytes: &[u8]) {
-        self.buf[self.pos..self.pos + bytes.len()].copy_from_slice(bytes);
-        self.pos += bytes.len();
+        let end = self.pos.saturating_add(bytes.len());
+        if let Some(dst) = self.buf.get_mut(self.pos..end) {
+            dst.copy_from_slice(bytes);
+            self.pos = end;
+        }
+    }
+
+    /// The bytes written so far.
+    fn written(self) -> &'a [u8] {
+        let Writer { buf, pos } = self;
+        buf.get(..pos).unwrap_or(&[])
     }
 }
 
@@ -129,17 +140,14 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         self.write_header(&mut hdr);
         w.put(&hdr);
         let mut chunk = [0u8; 160];
-        for s in self.blocks.canonical() {
-            let n = block_record(&self.blocks.slots[s], &mut chunk);
-            w.put(&chunk[..n]);
+        for b in self.blocks.canonical().filter_map(|s| self.blocks.get(s)) {
+            w.put(block_record(b, &mut chunk));
         }
-        for s in self.voxels.canonical() {
-            let v = &self.voxels.slots[s];
-            let n = voxel_record_head(v, &mut chunk);
-            w.put(&chunk[..n]);
+        for v in self.voxels.canonical().filter_map(|s| self.voxels.get(s)) {
+            w.put(voxel_record_head(v, &mut chunk));
             w.put(&v.hist);
         }
-        let crc = crc32(&w.buf[..w.pos]);
+        let crc = crc32(w.buf.get(..w.pos).unwrap_or(&[]));
         w.put(&crc.to_le_bytes());
         Ok(w.pos)
     }
@@ -153,14 +161,11 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let mut hdr = [0u8; SNAPSHOT_HEADER_BYTES];
         self.write_header(&mut hdr);
         crc.update(&hdr);
-        for s in self.blocks.canonical() {
-            let n = block_record(&self.blocks.slots[s], &mut chunk);
-            crc.update(&chunk[..n]);
+        for b in self.blocks.canonical().filter_map(|s| self.blocks.get(s)) {
+            crc.update(block_record(b, &mut chunk));
         }
-        for s in self.voxels.canonical() {
-            let v = &self.voxels.slots[s];
-            let n = voxel_record_head(v, &mut chunk);
-            crc.update(&chunk[..n]);
+        for v in self.voxels.canonical().filter_map(|s| self.voxels.get(s)) {
+            crc.update(voxel_record_head(v, &mut chunk));
             crc.update(&v.hist);
         }
         crc.finish()
@@ -383,7 +388,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 }
 
-fn block_record(b: &Block, out: &mut [u8; 160]) -> usize {
+fn block_record<'a>(b: &Block, out: &'a mut [u8; 160]) -> &'a [u8] {
     let mut w = Writer { buf: out, pos: 0 };
     for k in b.key {
         w.put(&k.to_le_bytes());
@@ -392,10 +397,10 @@ fn block_record(b: &Block, out: &mut [u8; 160]) -> usize {
         w.put(&l.to_le_bytes());
     }
     w.put(&b.surface.to_le_bytes());
-    w.pos
+    w.written()
 }
 
-fn voxel_record_head<const C: usize>(v: &Voxel<C>, out: &mut [u8; 160]) -> usize {
+fn voxel_record_head<'a, const C: usize>(v: &Voxel<C>, out: &'a mut [u8; 160]) -> &'a [u8] {
     let mut w = Writer { buf: out, pos: 0 };
     for k in v.key {
         w.put(&k.to_le_bytes());
@@ -405,7 +410,7 @@ fn voxel_record_head<const C: usize>(v: &Voxel<C>, out: &mut [u8; 160]) -> usize
         w.put(&x.to_le_bytes());
     }
     w.put(&[v.vote_exponent()]);
-    w.pos
+    w.written()
 }
 
 /// Header fields of a snapshot being read.

@@ -77,7 +77,9 @@ impl Footprint {
             // Rows whose centre `row + 0.5` lies in `[y0, y1]`, one more on each side.
             let first = to_pixel(libm::ceil(y0 - 0.5) - 1.0);
             let last = to_pixel(libm::floor(y1 - 0.5) + 2.0);
-            fp.rows = (first.clamp(rows.0, rows.1), last.clamp(rows.0, rows.1));
+            // max then min: clamp would panic on an empty band (rows.0 > rows.1).
+            let band = |r: u32| r.max(rows.0).min(rows.1);
+            fp.rows = (band(first), band(last));
         }
         fp
     }

@@ -75,12 +75,44 @@ impl<T: Entry, const N: usize> Table<T, N> {
         ((hash(packed) as u64 * N as u64) >> 32) as usize
     }
 
+    /// The entry in `slot`; `None` past the capacity.
+    #[inline]
+    pub(crate) fn get(&self, slot: usize) -> Option<&T> {
+        self.slots.get(slot)
+    }
+
+    /// The entry in `slot`, mutably; `None` past the capacity.
+    #[inline]
+    pub(crate) fn get_mut(&mut self, slot: usize) -> Option<&mut T> {
+        self.slots.get_mut(slot)
+    }
+
+    /// The entry a link (`slot + 1`) points to; `None` for [`NIL`]. `NIL - 1` wraps to
+    /// `usize::MAX`, so one range check covers both the end of a chain and a link out of
+    /// range, and a damaged link ends a walk instead of halting the program.
+    #[inline]
+    pub(crate) fn linked(&self, link: u32) -> Option<&T> {
+        self.slots.get((link as usize).wrapping_sub(1))
+    }
+
+    #[inline]
+    pub(crate) fn linked_mut(&mut self, link: u32) -> Option<&mut T> {
+        self.slots.get_mut((link as usize).wrapping_sub(1))
+    }
+
+    /// The first link of `packed`'s bucket.
+    #[inline]
+    fn bucket_head(&self, packed: u64) -> u32 {
+        self.slots
+            .get(Self::bucket(packed))
+            .map_or(NIL, |s| s.head())
+    }
+
     /// Slot index of `packed`, if present.
     pub(crate) fn find(&self, packed: u64) -> Option<usize> {
-        let mut i = self.slots[Self::bucket(packed)].head();
+        let mut i = self.bucket_head(packed);
         let want = order(packed);
-        while i != NIL {
-            let s = &self.slots[(i - 1) as usize];
+        while let Some(s) = self.linked(i) {
             let k = s.packed_key();
             if k == packed {
                 return Some((i - 1) as usize);
@@ -93,16 +125,24 @@ impl<T: Entry, const N: usize> Table<T, N> {
         None
     }
 
-    /// Inserts `entry` (whose key must not be present); `Err(entry)` when full.
-    pub(crate) fn insert(&mut self, mut entry: T) -> Result<usize, T> {
-        let slot = if self.free_head != NIL {
-            let s = (self.free_head - 1) as usize;
-            self.free_head = self.slots[s].chain();
-            s
+    /// Takes a slot for a new entry: the last one removed, or a never-used one; `None` when
+    /// every slot is live.
+    fn take_slot(&mut self) -> Option<usize> {
+        if let Some(s) = self.linked(self.free_head) {
+            let slot = (self.free_head - 1) as usize;
+            self.free_head = s.chain();
+            Some(slot)
         } else if (self.high as usize) < N {
             self.high += 1;
-            (self.high - 1) as usize
+            Some((self.high - 1) as usize)
         } else {
+            None
+        }
+    }
+
+    /// Inserts `entry` (whose key must not be present); `Err(entry)` when full.
+    pub(crate) fn insert(&mut self, mut entry: T) -> Result<usize, T> {
+        let Some(slot) = self.take_slot() else {
             return Err(entry);
         };
         let packed = entry.packed_key();
@@ -110,58 +150,69 @@ impl<T: Entry, const N: usize> Table<T, N> {
         let b = Self::bucket(packed);
         // Find the link to patch: the bucket head or the last chain entry ordered before us.
         let mut prev = NIL;
-        let mut next = self.slots[b].head();
-        while next != NIL {
-            let s = &self.slots[(next - 1) as usize];
+        let mut next = self.bucket_head(packed);
+        while let Some(s) = self.linked(next) {
             if order(s.packed_key()) > want {
                 break;
             }
             prev = next;
             next = s.chain();
         }
+        let Some(place) = self.slots.get_mut(slot) else {
+            return Err(entry);
+        };
         entry.set_chain(next);
-        entry.set_head(self.slots[slot].head());
-        self.slots[slot] = entry;
+        entry.set_head(place.head());
+        *place = entry;
+        let link = slot as u32 + 1;
         if prev == NIL {
-            self.slots[b].set_head(slot as u32 + 1);
-        } else {
-            self.slots[(prev - 1) as usize].set_chain(slot as u32 + 1);
+            if let Some(head) = self.slots.get_mut(b) {
+                head.set_head(link);
+            }
+        } else if let Some(p) = self.linked_mut(prev) {
+            p.set_chain(link);
         }
         self.len += 1;
         Ok(slot)
     }
 
-    /// Removes the live entry in `slot` and returns it.
+    /// Removes the live entry in `slot` and returns it (an empty entry for a slot past the
+    /// capacity, which removes nothing).
     pub(crate) fn remove(&mut self, slot: usize) -> T {
-        let entry = self.slots[slot];
+        let Some(&entry) = self.slots.get(slot) else {
+            return T::EMPTY;
+        };
         let b = Self::bucket(entry.packed_key());
         let target = slot as u32 + 1;
-        if self.slots[b].head() == target {
-            self.slots[b].set_head(entry.chain());
-        } else {
-            let mut i = self.slots[b].head();
-            while i != NIL {
-                let s = &mut self.slots[(i - 1) as usize];
-                if s.chain() == target {
-                    s.set_chain(entry.chain());
-                    break;
+        match self.slots.get_mut(b) {
+            Some(head) if head.head() == target => head.set_head(entry.chain()),
+            _ => {
+                let mut i = self.bucket_head(entry.packed_key());
+                while let Some(s) = self.linked_mut(i) {
+                    if s.chain() == target {
+                        s.set_chain(entry.chain());
+                        break;
+                    }
+                    i = s.chain();
                 }
-                i = s.chain();
             }
         }
         let mut empty = T::EMPTY;
         empty.set_chain(self.free_head);
-        empty.set_head(self.slots[slot].head());
-        self.slots[slot] = empty;
+        if let Some(place) = self.slots.get_mut(slot) {
+            empty.set_head(place.head());
+            *place = empty;
+        }
         self.free_head = target;
-        self.len -= 1;
+        self.len = self.len.saturating_sub(1);
         entry
     }
 
     /// Live slot indices in storage order (not canonical).
     pub(crate) fn live(&self) -> impl Iterator<Item = usize> + '_ {
-        self.slots[..self.high as usize]
+        self.slots
             .iter()
+            .take(self.high as usize)
             .enumerate()
             .filter(|(_, s)| s.packed_key() != 0)
             .map(|(i, _)| i)
@@ -169,18 +220,15 @@ impl<T: Entry, const N: usize> Table<T, N> {
 
     /// Live slot indices in canonical order `(hash, key)`, independent of insertion order.
     pub(crate) fn canonical(&self) -> impl Iterator<Item = usize> + '_ {
-        let mut bucket = 0usize;
+        let mut heads = self.slots.iter();
         let mut i = NIL;
         core::iter::from_fn(move || {
             while i == NIL {
-                if bucket >= N {
-                    return None;
-                }
-                i = self.slots[bucket].head();
-                bucket += 1;
+                i = heads.next()?.head();
             }
+            let s = self.linked(i)?;
             let slot = (i - 1) as usize;
-            i = self.slots[slot].chain();
+            i = s.chain();
             Some(slot)
         })
     }
