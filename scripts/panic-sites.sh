@@ -21,7 +21,7 @@ if ! command -v llvm-objdump >/dev/null 2>&1 || ! command -v llvm-addr2line >/de
 fi
 
 # Panic entry points: the functions a failed check calls (names as llvm-objdump -C prints).
-panic_fn='panic|slice_index_fail|slice_(start|end)_index_(len_)?fail|index_order_fail|unwrap_failed|expect_failed|assert_failed|str_index_overflow_fail'
+panic_fn='panic|_fail(ed)?$|assert_failed'
 
 dis="$(mktemp)"
 chains="$(mktemp)"
@@ -31,8 +31,9 @@ llvm-objdump -d --no-show-raw-insn -C "$elf" >"$dis"
 # Call sites: direct calls and tail branches to an entry point, from outside the entry points
 # themselves (panic_fmt calling the panic handler is not a site).
 mapfile -t sites < <(awk -v pat="$panic_fn" '
-    /^[0-9a-f]+ <.*>:$/ { inside = ($0 ~ pat) }
-    !inside && $2 ~ /^(bl|b|b\.w)$/ && $0 ~ ("<[^>]*(" pat ")[^>]*>") { sub(":", "", $1); print "0x" $1 }
+    function symbol(line) { sub(/^[^<]*</, "", line); sub(/>[^>]*$/, "", line); return line }
+    /^[0-9a-f]+ <.*>:$/ { inside = (symbol($0) ~ pat); next }
+    !inside && $2 ~ /^(bl|b|b\.w)$/ && /</ && symbol($0) ~ pat { sub(":", "", $1); print "0x" $1 }
 ' "$dis")
 
 if ((${#sites[@]} > 0)); then
@@ -40,8 +41,9 @@ if ((${#sites[@]} > 0)); then
     llvm-addr2line -a -f -i -C -e "$elf" "${sites[@]}" >"$chains"
 fi
 
-# One line per site: "core|firmware <innermost function of sndt_core, or the outermost one>
-# (file:line of that frame)". The innermost core frame says which core function holds the check.
+# One line per site: "core|firmware ADDRESS FUNCTION (file:line)": the innermost frame of
+# sndt_core when the chain has one (the core function that holds the check), else the
+# innermost frame outside the standard library.
 awk '
     # Legacy Rust symbols as addr2line leaves them: drop the hash, decode the escapes.
     function demangle(s) {
@@ -63,7 +65,8 @@ awk '
         at = $0; sub(/.*\//, "", at)
         name = demangle(fn)
         if (core == "" && name ~ /^sndt_core::/) { core = name; core_at = at }
-        last = name; last_at = at
+        # For the firmware'"'"'s own sites: the innermost frame outside the standard library.
+        if (last == "" && name !~ /^_?<?(core|alloc)::/) { last = name; last_at = at }
         expect_fn = 1
     }
     END { flush() }

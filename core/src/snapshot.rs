@@ -46,10 +46,10 @@ impl<'a> Writer<'a> {
     /// Appends `bytes`. Callers size the buffer first (`snapshot_len`, fixed records), so
     /// they always fit; were they not to, they are left out instead of halting.
     fn put(&mut self, bytes: &[u8]) {
-        let end = self.pos.saturating_add(bytes.len());
-        if let Some(dst) = self.buf.get_mut(self.pos..end) {
+        let rest = self.buf.get_mut(self.pos..);
+        if let Some(dst) = rest.and_then(|r| r.get_mut(..bytes.len())) {
             dst.copy_from_slice(bytes);
-            self.pos = end;
+            self.pos += bytes.len();
         }
     }
 

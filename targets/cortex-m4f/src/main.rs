@@ -70,7 +70,10 @@ fn main() -> ! {
             syst.set_reload(0x00ff_ffff);
             syst.clear_current();
             syst.enable_counter();
-            interrupt::free(|cs| run(&mut MAP.borrow(cs).borrow_mut(), &mut syst).unwrap_or(false))
+            interrupt::free(|cs| match MAP.borrow(cs).try_borrow_mut() {
+                Ok(mut map) => run(&mut map, &mut syst).unwrap_or(false),
+                Err(_) => false,
+            })
         }
         None => false,
     };
@@ -286,14 +289,23 @@ fn cast_probes(map: &FwMap, v: &Vector<'_>) -> Result<Vec<Probe, MAX_PROBES>, Ab
         let ray = v.camera.ray(col, row);
         let ray = Vector3::new(ray[0], ray[1], ray[2]);
         let px = (row * v.camera.width + col) as usize;
+        let (Some(&depth), Some(&class)) = (f.depth.get(px), f.labels.get(px)) else {
+            defmt::error!(
+                "probe {=usize}: pixel {=u32},{=u32} outside the image",
+                i,
+                col,
+                row
+            );
+            return Err(Abort);
+        };
         let origin = Point3::from(pose.translation.vector);
         let probe = Probe {
             frame: k,
             col,
             row,
             hit: map.raycast(&origin, &(pose.rotation * ray), 10.0),
-            want_t: f.depth[px] * ray.norm(),
-            want_class: f.labels[px],
+            want_t: depth * ray.norm(),
+            want_class: class,
         };
         if probes.push(probe).is_err() {
             defmt::error!("test vector: more than {=usize} probes", MAX_PROBES);

@@ -59,12 +59,20 @@ pub struct Vector<'a> {
     pub probes: usize,
 }
 
+/// The little-endian `N` bytes at `o`; zeros past the end (lengths are checked when the
+/// vector is parsed, so that never happens, and a read past the end must not halt).
+fn bytes_at<const N: usize>(b: &[u8], o: usize) -> [u8; N] {
+    b.get(o..o.saturating_add(N))
+        .and_then(|s| s.try_into().ok())
+        .unwrap_or([0; N])
+}
+
 fn u16_at(b: &[u8], o: usize) -> u16 {
-    u16::from_le_bytes([b[o], b[o + 1]])
+    u16::from_le_bytes(bytes_at(b, o))
 }
 
 fn u32_at(b: &[u8], o: usize) -> u32 {
-    u32::from_le_bytes([b[o], b[o + 1], b[o + 2], b[o + 3]])
+    u32::from_le_bytes(bytes_at(b, o))
 }
 
 fn f32_at(b: &[u8], o: usize) -> f32 {
@@ -83,7 +91,7 @@ impl<'a> Vector<'a> {
         if bytes.len() < HEADER_BYTES {
             return Err(VectorError::Size);
         }
-        if &bytes[..8] != MAGIC {
+        if bytes.get(..8) != Some(&MAGIC[..]) {
             return Err(VectorError::Magic);
         }
         if u16_at(bytes, 8) != VERSION {
@@ -147,13 +155,13 @@ impl<'a> Vector<'a> {
         let d = o + POSE_BYTES;
         // Both targets are little-endian, so the bytes are the f32 values; bytemuck checks
         // the alignment (Err instead of undefined behaviour).
-        let depth: &[f32] =
-            bytemuck::try_cast_slice(&b[d..d + 4 * n]).map_err(|_| VectorError::Align)?;
+        let depth = b.get(d..d + 4 * n).ok_or(VectorError::Size)?;
+        let depth: &[f32] = bytemuck::try_cast_slice(depth).map_err(|_| VectorError::Align)?;
         Ok(Frame {
             rotation,
             translation,
             depth,
-            labels: &b[d + 4 * n..d + 5 * n],
+            labels: b.get(d + 4 * n..d + 5 * n).ok_or(VectorError::Size)?,
         })
     }
 }
