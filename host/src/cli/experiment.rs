@@ -1,12 +1,14 @@
 //! `sndt experiment`: the paper's comparison of S-NDT, S-BKI and OS-BKI per cell size and
-//! kernel length (Tables I and II, per-class IoU, rate-vs-mIoU charts).
+//! kernel length (Tables I and II, per-class IoU, rate-vs-mIoU charts); `--resume`
+//! continues an interrupted one from the runs it kept on disk.
 
 use crate::cli::open_args::OpenArgs;
 use crate::dataset::frame::LabelSource;
 use crate::dataset::open::open_spec;
 use crate::dataset::source::{Dataset, Every};
-use crate::eval::experiment::{progress_steps, run as run_experiment, Experiment};
+use crate::eval::experiment::{manifest, progress_steps, run_resumable, Experiment};
 use crate::eval::experiment::{ExperimentOptions, Method};
+use crate::eval::run_store::{Manifest, RunStore};
 use crate::output::progress::progress;
 use anyhow::Result;
 use sndt_core::Config;
@@ -89,9 +91,17 @@ pub struct ExperimentArgs {
     /// Use every k-th frame of each trajectory (1 = all, as the paper).
     #[arg(long, default_value_t = 1)]
     pub every: u32,
-    /// Output directory for tables and charts.
+    /// Output directory for tables and charts. Each finished run (one map on one
+    /// trajectory) is also kept in `<out>/runs/` as soon as it is finished.
     #[arg(long, default_value = "out/experiment")]
     pub out: PathBuf,
+    /// Continue an interrupted experiment in `--out`: the runs kept in `<out>/runs/` are
+    /// taken instead of computed again, the rest is run, and the same tables are written
+    /// (resumed runs keep the update times measured when they ran). Refused if they were
+    /// made with other options. Without `--resume`, the runs kept in `<out>/runs/` are
+    /// removed and everything is computed afresh.
+    #[arg(long)]
+    pub resume: bool,
     /// How to open the dataset.
     #[command(flatten)]
     pub open: OpenArgs,
@@ -109,10 +119,22 @@ impl ExperimentArgs {
             votes_per_frame: self.votes_per_frame,
         }
     }
+
+    /// Everything the stored runs depend on: the experiment's own options, the dataset as
+    /// given, `--every`, how it was opened, and this sndt's version.
+    fn manifest(&self, opts: &ExperimentOptions, dataset: &dyn Dataset) -> Manifest {
+        let mut m = manifest(opts, dataset);
+        m.insert("dataset".into(), self.dataset.clone());
+        m.insert("--every".into(), self.every.max(1).to_string());
+        m.insert("dataset options".into(), format!("{:?}", self.open));
+        m.insert("sndt version".into(), env!("CARGO_PKG_VERSION").into());
+        m
+    }
 }
 
-/// Runs `sndt experiment`: runs every method, label source, cell size and kernel length,
-/// prints the tables and writes them with the charts into `--out`.
+/// Runs `sndt experiment`: runs every method, label source, cell size and kernel length
+/// (taking finished runs from `<out>/runs/` with `--resume`), prints the tables and writes
+/// them with the charts into `--out`.
 pub fn run(a: &ExperimentArgs) -> Result<()> {
     let mut dataset = open_spec(&a.dataset, &a.open.options()?)?;
     if a.every > 1 {
@@ -120,13 +142,25 @@ pub fn run(a: &ExperimentArgs) -> Result<()> {
     }
     println!("sndt experiment: {}", dataset.describe());
     let opts = a.options();
+    let store = RunStore::open(
+        &a.out.join("runs"),
+        &a.manifest(&opts, dataset.as_ref()),
+        a.resume,
+    )?;
     let t = Instant::now();
-    let exp = run_with_progress(dataset.as_ref(), &opts, t)?;
+    let exp = run_with_progress(dataset.as_ref(), &opts, &store, t)?;
     println!(
-        "{} trajectories, {} frames, {:.0} s\n",
+        "{} trajectories, {} frames, {:.0} s",
         dataset.trajectories().len(),
         exp.frames,
         t.elapsed().as_secs_f64()
+    );
+    println!(
+        "resumed {} of {} runs, computed {} (a run: one map on one trajectory; kept in {})\n",
+        store.resumed(),
+        store.resumed() + store.computed(),
+        store.computed(),
+        store.dir().display()
     );
     print_tables(&exp);
     for p in exp.write(&a.out)? {
@@ -140,6 +174,7 @@ pub fn run(a: &ExperimentArgs) -> Result<()> {
 fn run_with_progress(
     dataset: &dyn Dataset,
     opts: &ExperimentOptions,
+    store: &RunStore,
     t: Instant,
 ) -> Result<Experiment> {
     let steps = progress_steps(opts, dataset.frames().len());
@@ -156,7 +191,7 @@ fn run_with_progress(
             );
         }
     };
-    let exp = run_experiment(dataset, opts, &tick)?;
+    let exp = run_resumable(dataset, opts, store, &tick)?;
     bar.finish_and_clear();
     Ok(exp)
 }

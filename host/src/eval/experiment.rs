@@ -9,12 +9,20 @@
 //! turn; trajectories run in parallel (rayon), each map is built by one thread, so update
 //! times are single-threaded figures. S-BKI and OS-BKI share one map per kernel length
 //! (their counts are the same, see [`crate::baselines::bki`]); the update time is that map's.
+//!
+//! [`run_resumable`] keeps every finished run (one map on one trajectory) in a
+//! [`RunStore`] as soon as it is finished, with everything the tables take from it
+//! (confusion matrices, surface read-outs, update time), and takes the runs the store
+//! already holds instead of computing them again: an interrupted experiment continues
+//! where it stopped and writes the tables an uninterrupted one would (update times of
+//! resumed runs are those measured when they ran).
 
 use crate::baselines::bki::{BkiConfig, BkiMap, Readout, SurfaceStates};
-use crate::dataset::frame::{Frame, LabelSource};
+use crate::dataset::frame::{Frame, FrameId, LabelSource};
 use crate::dataset::source::Dataset;
 use crate::eval::evaluate::{gt_depth, map_and_score, MapScore};
 use crate::eval::metrics::{Confusion, Metrics};
+use crate::eval::run_store::{file_name_part, Manifest, RunStore};
 use crate::semantic_map::{boxed_map, HostMap, SemanticMap};
 use anyhow::{anyhow, bail, Context, Result};
 use rayon::prelude::*;
@@ -239,6 +247,80 @@ pub fn run(
     options: &ExperimentOptions,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Experiment> {
+    run_with(dataset, options, None, progress)
+}
+
+/// [`run`], keeping each finished run in `store` as soon as it is finished and taking the
+/// runs `store` already holds instead of computing them again (`sndt experiment
+/// --resume`). Runs taken from the store keep the update times measured when they were
+/// computed, so an interrupted and resumed experiment writes the same tables as the
+/// stored runs and the new ones together; progress steps of stored runs are reported at
+/// once. The store counts runs resumed and computed ([`RunStore::resumed`],
+/// [`RunStore::computed`]).
+pub fn run_resumable(
+    dataset: &dyn Dataset,
+    options: &ExperimentOptions,
+    store: &RunStore,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Experiment> {
+    run_with(dataset, options, Some(store), progress)
+}
+
+/// What every trajectory runs, and where its runs are kept.
+struct Plan<'a> {
+    options: &'a ExperimentOptions,
+    sources: Vec<Segmentation>,
+    bki_methods: Vec<Method>,
+    store: Option<&'a RunStore>,
+    progress: &'a (dyn Fn() + Sync),
+}
+
+fn run_with(
+    dataset: &dyn Dataset,
+    options: &ExperimentOptions,
+    store: Option<&RunStore>,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Experiment> {
+    let (sources, bki_methods) = check(options)?;
+    let plan = Plan {
+        options,
+        sources,
+        bki_methods,
+        store,
+        progress,
+    };
+    let trajectories = dataset.trajectories();
+    let parts: Vec<Result<(String, TrajectoryRuns)>> = trajectories
+        .par_iter()
+        .map(|(name, ids)| {
+            let part = run_trajectory(dataset, name, ids, &plan)
+                .with_context(|| format!("trajectory {name}"))?;
+            Ok((name.clone(), part))
+        })
+        .collect();
+    let mut exp = Experiment::default();
+    for p in parts {
+        let (name, (runs, inputs, n)) = p?;
+        exp.frames += n;
+        for (key, confusion, seconds, surface) in runs {
+            let run = exp.runs.entry(key).or_default();
+            run.confusion.merge(&confusion);
+            run.surface.voxels += surface.voxels;
+            run.surface.free += surface.free;
+            run.surface.unknown += surface.unknown;
+            run.surface.occupied += surface.occupied;
+            run.trajectories.push((name.clone(), n, seconds));
+        }
+        for (labels, c) in inputs {
+            exp.inputs.entry(labels).or_default().merge(&c);
+        }
+    }
+    Ok(exp)
+}
+
+/// Checks `options` before anything runs: the label sources as segmentations and the BKI
+/// methods asked for.
+fn check(options: &ExperimentOptions) -> Result<(Vec<Segmentation>, Vec<Method>)> {
     let sources: Vec<Segmentation> = options
         .labels
         .iter()
@@ -262,37 +344,7 @@ pub fn run(
             bki_config(options, cell, l).validate()?;
         }
     }
-    let trajectories = dataset.trajectories();
-    let parts: Vec<Result<(String, TrajectoryRuns)>> = trajectories
-        .par_iter()
-        .map(|(name, ids)| {
-            let frames = ids
-                .iter()
-                .map(|id| dataset.load(id))
-                .collect::<Result<Vec<Frame>>>()?;
-            let part = run_trajectory(&frames, options, &sources, &bki_methods, progress)
-                .with_context(|| format!("trajectory {name}"))?;
-            Ok((name.clone(), part))
-        })
-        .collect();
-    let mut exp = Experiment::default();
-    for p in parts {
-        let (name, (runs, inputs, n)) = p?;
-        exp.frames += n;
-        for (key, confusion, seconds, surface) in runs {
-            let run = exp.runs.entry(key).or_default();
-            run.confusion.merge(&confusion);
-            run.surface.voxels += surface.voxels;
-            run.surface.free += surface.free;
-            run.surface.unknown += surface.unknown;
-            run.surface.occupied += surface.occupied;
-            run.trajectories.push((name.clone(), n, seconds));
-        }
-        for (labels, c) in inputs {
-            exp.inputs.entry(labels).or_default().merge(&c);
-        }
-    }
-    Ok(exp)
+    Ok((sources, bki_methods))
 }
 
 fn sndt_config(options: &ExperimentOptions, cell: f32) -> Config {
@@ -322,54 +374,117 @@ type TrajectoryRuns = (
 /// BKI kernel length (`Some`).
 type Job = (Segmentation, f32, Option<f32>);
 
-/// One trajectory through every configuration: per segmentation, its input labels scored,
-/// then per cell size S-NDT and, per kernel length, one BKI map read out as S-BKI and / or
-/// OS-BKI. The maps are independent, so they are built in parallel (rayon): with more
-/// maps than trajectories, no core idles while the last trajectory finishes. Update times
-/// are unaffected: an update makes no rayon call, so no other work is stolen into it.
-fn run_trajectory(
-    frames: &[Frame],
-    options: &ExperimentOptions,
-    sources: &[Segmentation],
-    bki_methods: &[Method],
-    progress: &(dyn Fn() + Sync),
-) -> Result<TrajectoryRuns> {
-    let inputs = sources
-        .iter()
-        .map(|&s| Ok((s, input_confusion(frames, s)?)))
-        .collect::<Result<Vec<_>>>()?;
-    let mut jobs: Vec<Job> = Vec::new();
-    for &segmentation in sources {
-        for &cell in &options.cells {
-            if options.methods.contains(&Method::Sndt) {
-                jobs.push((segmentation, cell, None));
-            }
-            if !bki_methods.is_empty() {
-                jobs.extend(
-                    options
-                        .kernels
-                        .iter()
-                        .map(|&l| (segmentation, cell, Some(l))),
-                );
+/// What one [`Job`] yields: one result for S-NDT, one per BKI read-out.
+type JobRuns = Vec<(RunKey, Confusion, f64, SurfaceStates)>;
+
+impl Plan<'_> {
+    /// Every map to build on a trajectory: per segmentation and cell size, S-NDT and, per
+    /// kernel length, one BKI map read out as S-BKI and / or OS-BKI.
+    fn jobs(&self) -> Vec<Job> {
+        let mut jobs: Vec<Job> = Vec::new();
+        for &segmentation in &self.sources {
+            for &cell in &self.options.cells {
+                if self.options.methods.contains(&Method::Sndt) {
+                    jobs.push((segmentation, cell, None));
+                }
+                if !self.bki_methods.is_empty() {
+                    jobs.extend(
+                        self.options
+                            .kernels
+                            .iter()
+                            .map(|&l| (segmentation, cell, Some(l))),
+                    );
+                }
             }
         }
+        jobs
     }
+
+    /// The methods a job's map is read out as, in the order of its results.
+    fn methods(&self, (_, _, kernel): Job) -> &[Method] {
+        match kernel {
+            None => &[Method::Sndt],
+            Some(_) => &self.bki_methods,
+        }
+    }
+
+    /// Reports the progress steps of a job taken from the store: one per frame mapped and
+    /// one per frame back-projected per read-out, as if it had run.
+    fn skip(&self, job: Job, frames: usize) {
+        if let Some(store) = self.store {
+            store.count_resumed();
+        }
+        for _ in 0..frames * (1 + self.methods(job).len()) {
+            (self.progress)();
+        }
+    }
+}
+
+/// One trajectory through every configuration: the input labels scored per segmentation,
+/// then every map of [`Plan::jobs`]. The maps are independent, so they are built in
+/// parallel (rayon): with more maps than trajectories, no core idles while the last
+/// trajectory finishes. Update times are unaffected: an update makes no rayon call, so no
+/// other work is stolen into it. Results the store holds are taken from it; the frames
+/// are only loaded when something is left to compute.
+fn run_trajectory(
+    dataset: &dyn Dataset,
+    name: &str,
+    ids: &[FrameId],
+    plan: &Plan,
+) -> Result<TrajectoryRuns> {
+    let n = ids.len();
+    let jobs = plan.jobs();
+    let stored: Vec<Option<JobRuns>> = jobs
+        .iter()
+        .map(|&job| plan.store.and_then(|s| load_job(s, plan, name, n, job)))
+        .collect();
+    let stored_inputs = plan.store.and_then(|s| load_inputs(s, plan, name, n));
+    let frames = if stored_inputs.is_none() || stored.iter().any(Option::is_none) {
+        ids.iter()
+            .map(|id| dataset.load(id))
+            .collect::<Result<Vec<Frame>>>()?
+    } else {
+        Vec::new()
+    };
+    let inputs = match stored_inputs {
+        Some(inputs) => inputs,
+        None => {
+            let inputs = plan
+                .sources
+                .iter()
+                .map(|&s| Ok((s, input_confusion(&frames, s)?)))
+                .collect::<Result<Vec<_>>>()?;
+            if let Some(store) = plan.store {
+                store.save(&inputs_file(name), &stored_inputs_of(name, n, &inputs))?;
+            }
+            inputs
+        }
+    };
     let runs = jobs
         .par_iter()
-        .map(|&job| run_job(frames, options, job, bki_methods, progress))
+        .zip(stored.into_par_iter())
+        .map(|(&job, stored)| match stored {
+            Some(runs) => {
+                plan.skip(job, n);
+                Ok(runs)
+            }
+            None => {
+                let runs = run_job(&frames, plan, job)?;
+                if let Some(store) = plan.store {
+                    let record = stored_job_of(name, n, job, &runs);
+                    store.save_result(&job_file(name, job), &record)?;
+                }
+                Ok(runs)
+            }
+        })
         .collect::<Result<Vec<_>>>()?;
-    Ok((runs.into_iter().flatten().collect(), inputs, frames.len()))
+    Ok((runs.into_iter().flatten().collect(), inputs, n))
 }
 
 /// Builds and scores one map of [`run_trajectory`]: one result for S-NDT, one per BKI
 /// read-out.
-fn run_job(
-    frames: &[Frame],
-    options: &ExperimentOptions,
-    (segmentation, cell, kernel): Job,
-    bki_methods: &[Method],
-    progress: &(dyn Fn() + Sync),
-) -> Result<Vec<(RunKey, Confusion, f64, SurfaceStates)>> {
+fn run_job(frames: &[Frame], plan: &Plan, (segmentation, cell, kernel): Job) -> Result<JobRuns> {
+    let (options, progress) = (plan.options, plan.progress);
     let key = |method, kernel_mm| RunKey {
         labels: segmentation,
         method,
@@ -388,6 +503,7 @@ fn run_job(
             .map(|c| (key(Method::Sndt, 0), c, seconds, Default::default()))
             .collect());
     };
+    let bki_methods = &plan.bki_methods;
     let readouts: Vec<Readout> = bki_methods.iter().map(|&m| bki_readout(m)).collect();
     let mut map = BkiMap::new(bki_config(options, cell, l))?;
     let score = run_map(&mut map, frames, labels, &readouts, progress)?;
@@ -405,6 +521,252 @@ fn run_job(
             )
         })
         .collect())
+}
+
+/// The options an experiment's stored runs depend on (besides how the dataset was
+/// opened, which the caller adds): the grid, the methods' parameters and the frames run,
+/// named as `sndt experiment` spells them, for [`RunStore::open`].
+pub fn manifest(options: &ExperimentOptions, dataset: &dyn Dataset) -> Manifest {
+    let list = |v: &[f32]| -> String {
+        let v: Vec<String> = v.iter().map(f32::to_string).collect();
+        v.join(",")
+    };
+    let labels: Vec<String> = options
+        .labels
+        .iter()
+        .map(|l| format!("{l:?}").to_lowercase())
+        .collect();
+    let methods: Vec<&str> = options.methods.iter().map(|m| m.name()).collect();
+    // Frame ids hashed (FNV-1a): a dataset whose frames changed is not resumed, however
+    // it is named.
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    for id in dataset.frames() {
+        for b in format!("{}/{}/{}\n", id.scene, id.cam, id.index).bytes() {
+            hash = (hash ^ b as u64).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    let frames = format!(
+        "{} trajectories, {} frames, ids {hash:016x}",
+        dataset.trajectories().len(),
+        dataset.frames().len()
+    );
+    let free = options
+        .free_resolution
+        .map_or_else(|| "default".to_string(), |f| f.to_string());
+    [
+        ("--labels", labels.join(",")),
+        ("--cells", list(&options.cells)),
+        ("--kernels", list(&options.kernels)),
+        ("--methods", methods.join(",")),
+        ("--free-resolution", free),
+        ("--votes-per-frame", options.votes_per_frame.to_string()),
+        ("frames", frames),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect()
+}
+
+/// One finished [`Job`] on one trajectory as stored: everything the tables take from it.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct StoredJob {
+    trajectory: String,
+    frames: usize,
+    labels: String,
+    cell_mm: u32,
+    /// 0 for S-NDT.
+    kernel_mm: u32,
+    /// Update time, seconds, as Rust writes an `f64` (the shortest decimal that reads back
+    /// to the same value): a JSON number need not read back exactly, and resumed tables
+    /// must show the time measured.
+    update_s: String,
+    /// One per method the map was read out as, in [`Plan::methods`] order.
+    results: Vec<StoredResult>,
+}
+
+/// One read-out of a stored job.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct StoredResult {
+    method: String,
+    /// The non-zero cells of the confusion matrix: `[gt, prediction, count]`.
+    confusion: Vec<[u64; 3]>,
+    surface_voxels: u64,
+    surface_free: u64,
+    surface_unknown: u64,
+    surface_occupied: u64,
+}
+
+/// One trajectory's input labels scored, as stored: per segmentation tag, the non-zero
+/// confusion cells.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct StoredInputs {
+    trajectory: String,
+    frames: usize,
+    inputs: BTreeMap<String, Vec<[u64; 3]>>,
+}
+
+/// The store's file of a job on trajectory `name`:
+/// `<trajectory>__<labels>__sndt__cell<mm>mm.json` or
+/// `<trajectory>__<labels>__bki-kernel<mm>mm__cell<mm>mm.json` (S-BKI and OS-BKI read
+/// out of the same map share its file).
+fn job_file(name: &str, (segmentation, cell, kernel): Job) -> String {
+    let method = match kernel {
+        None => "sndt".to_string(),
+        Some(l) => format!("bki-kernel{}mm", mm(l)),
+    };
+    format!(
+        "{}__{}__{method}__cell{}mm.json",
+        file_name_part(name),
+        segmentation.tag(),
+        mm(cell)
+    )
+}
+
+/// The store's file of trajectory `name`'s input labels scored.
+fn inputs_file(name: &str) -> String {
+    format!("{}__inputs.json", file_name_part(name))
+}
+
+fn stored_job_of(name: &str, frames: usize, job: Job, runs: &JobRuns) -> StoredJob {
+    let (segmentation, cell, kernel) = job;
+    StoredJob {
+        trajectory: name.to_string(),
+        frames,
+        labels: segmentation.tag().to_string(),
+        cell_mm: mm(cell),
+        kernel_mm: kernel.map_or(0, mm),
+        update_s: runs.first().map_or(0.0, |r| r.2).to_string(),
+        results: runs
+            .iter()
+            .map(|(key, confusion, _, surface)| StoredResult {
+                method: key.method.name().to_string(),
+                confusion: sparse(confusion),
+                surface_voxels: surface.voxels,
+                surface_free: surface.free,
+                surface_unknown: surface.unknown,
+                surface_occupied: surface.occupied,
+            })
+            .collect(),
+    }
+}
+
+/// The stored job `job` on trajectory `name` of `frames` frames, if the store holds it
+/// whole and for that job.
+fn load_job(store: &RunStore, plan: &Plan, name: &str, frames: usize, job: Job) -> Option<JobRuns> {
+    store.load(&job_file(name, job), |s: StoredJob| {
+        let (segmentation, cell, kernel) = job;
+        let kernel_mm = kernel.map_or(0, mm);
+        let holds = (&*s.trajectory, s.frames, &*s.labels, s.cell_mm, s.kernel_mm);
+        if holds != (name, frames, segmentation.tag(), mm(cell), kernel_mm) {
+            return Err(format!(
+                "holds {holds:?}, not (trajectory, frames, labels, cell mm, kernel mm) {:?}",
+                (name, frames, segmentation.tag(), mm(cell), kernel_mm)
+            ));
+        }
+        let seconds = s
+            .update_s
+            .parse::<f64>()
+            .ok()
+            .filter(|t| t.is_finite() && *t >= 0.0)
+            .ok_or_else(|| format!("update time {:?} is not a time", s.update_s))?;
+        let want: Vec<&str> = plan.methods(job).iter().map(|m| m.name()).collect();
+        let got: Vec<&str> = s.results.iter().map(|r| &*r.method).collect();
+        if got != want {
+            return Err(format!("holds read-outs {got:?}, not {want:?}"));
+        }
+        let key = |method| RunKey {
+            labels: segmentation,
+            method,
+            kernel_mm,
+            cell_mm: mm(cell),
+        };
+        s.results
+            .iter()
+            .zip(plan.methods(job))
+            .map(|(r, &method)| {
+                let surface = SurfaceStates {
+                    voxels: r.surface_voxels,
+                    free: r.surface_free,
+                    unknown: r.surface_unknown,
+                    occupied: r.surface_occupied,
+                };
+                Ok((key(method), dense(&r.confusion)?, seconds, surface))
+            })
+            .collect()
+    })
+}
+
+fn stored_inputs_of(
+    name: &str,
+    frames: usize,
+    inputs: &[(Segmentation, Confusion)],
+) -> StoredInputs {
+    StoredInputs {
+        trajectory: name.to_string(),
+        frames,
+        inputs: inputs
+            .iter()
+            .map(|(s, c)| (s.tag().to_string(), sparse(c)))
+            .collect(),
+    }
+}
+
+/// Trajectory `name`'s stored input scores, if the store holds them for every source.
+fn load_inputs(
+    store: &RunStore,
+    plan: &Plan,
+    name: &str,
+    frames: usize,
+) -> Option<Vec<(Segmentation, Confusion)>> {
+    store.load(&inputs_file(name), |s: StoredInputs| {
+        if (&*s.trajectory, s.frames) != (name, frames) {
+            return Err(format!(
+                "holds trajectory {} of {} frames, not {name} of {frames}",
+                s.trajectory, s.frames
+            ));
+        }
+        plan.sources
+            .iter()
+            .map(|&source| {
+                let cells = s
+                    .inputs
+                    .get(source.tag())
+                    .ok_or_else(|| format!("no {} labels", source.tag()))?;
+                Ok((source, dense(cells)?))
+            })
+            .collect()
+    })
+}
+
+/// The non-zero cells of a confusion matrix, `[gt, prediction, count]`.
+fn sparse(c: &Confusion) -> Vec<[u64; 3]> {
+    let mut out = Vec::new();
+    for (g, row) in c.cm.iter().enumerate() {
+        for (p, &n) in row.iter().enumerate() {
+            if n > 0 {
+                out.push([g as u64, p as u64, n]);
+            }
+        }
+    }
+    out
+}
+
+/// The confusion matrix of [`sparse`]'s cells; an index outside the matrix or a cell
+/// given twice is an error.
+fn dense(cells: &[[u64; 3]]) -> std::result::Result<Confusion, String> {
+    let mut c = Confusion::default();
+    for &[g, p, n] in cells {
+        let cell = usize::try_from(g)
+            .ok()
+            .zip(usize::try_from(p).ok())
+            .and_then(|(g, p)| c.cm.get_mut(g)?.get_mut(p))
+            .ok_or_else(|| format!("confusion cell ({g}, {p}) is outside the matrix"))?;
+        if *cell != 0 {
+            return Err(format!("confusion cell ({g}, {p}) is given twice"));
+        }
+        *cell = n;
+    }
+    Ok(c)
 }
 
 /// One configuration's map through the trajectory ([`map_and_score`], every pixel), one

@@ -5,6 +5,7 @@
 //!   evaluator computes them;
 //! - [`evaluate`]: one map per trajectory, back-projected into every frame;
 //! - [`experiment`]: S-NDT, S-BKI and OS-BKI per cell size and kernel (Tables I and II);
+//! - [`run_store`]: the experiment's finished runs kept on disk, to resume it;
 //! - [`compare`]: the core against the f64 reference, with stated tolerances.
 
 pub mod compare;
@@ -12,3 +13,4 @@ pub mod evaluate;
 pub mod experiment;
 pub mod label_stats;
 pub mod metrics;
+pub mod run_store;
