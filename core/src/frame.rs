@@ -348,7 +348,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// Bottom-up merge sort of the frame's block list by packed key (no allocation).
     pub(crate) fn sort_frame_list(&mut self, head: u32) -> u32 {
         // A damaged link ends a run (`next`) and sorts last (`key`) instead of halting.
-        let key = |m: &Self, i: u32| m.blocks.linked(i).map_or(u64::MAX, |b| b.packed_key());
+        let key = |m: &Self, i: u32| m.blocks.linked(i).map_or(u64::MAX, Entry::packed_key);
         let next = |m: &Self, i: u32| m.blocks.linked(i).map_or(NIL, |b| b.frame_next);
         let mut list = head;
         let mut insize = 1usize;

@@ -105,7 +105,7 @@ impl<T: Entry, const N: usize> Table<T, N> {
     fn bucket_head(&self, packed: u64) -> u32 {
         self.slots
             .get(Self::bucket(packed))
-            .map_or(NIL, |s| s.head())
+            .map_or(NIL, Entry::head)
     }
 
     /// Slot index of `packed`, if present.
