@@ -1,7 +1,9 @@
 //! The one plain configuration struct of the map, with documented defaults.
 
-use crate::error::Error;
+use crate::error::{ConfigField, Error};
+use crate::key::KEY_LIMIT;
 use crate::labels::MAX_TOP_K;
+use core::fmt;
 
 /// How a voxel traversed by a free-space ray loses occupancy.
 ///
@@ -20,7 +22,9 @@ pub enum MissModel {
     Constant = 1,
 }
 
-/// Map configuration. Every field is public; [`Config::DEFAULT`] documents the defaults.
+/// Map configuration. Every field is public; [`Config::DEFAULT`] documents the defaults,
+/// each field its range, and [`Config::validate`] refuses a config with a field out of its
+/// range, naming the field ([`ConfigField`]).
 ///
 /// ```
 /// let mut config = sndt_core::Config::DEFAULT;
@@ -30,7 +34,8 @@ pub enum MissModel {
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Config {
-    /// Voxel edge `h` in metres, in `[0.001, 100]`. Default 0.10.
+    /// Voxel edge `h` in metres, in `[0.001, 100]`. Default 0.10. Bounds
+    /// [`Config::max_range`] from below: at most [`Config::MAX_RAY_CELLS`] cells per ray.
     pub cell_size: f32,
     /// Point offsets inside a voxel are quantised to `h / 2^quant_bits`. Default 6
     /// (1.56 mm at 10 cm). At most [`Config::MAX_QUANT_BITS`] so the integer sums provably
@@ -62,7 +67,11 @@ pub struct Config {
     pub noise_base: f32,
     /// See [`Config::noise_base`].
     pub noise_quadratic: f32,
-    /// Points farther than this (metres) only clear free space up to it. Default 20.
+    /// Points farther than this (metres) only clear free space up to it, and rendering
+    /// rays end here. Default 20, in `[0.001, 1e4]` and at most
+    /// [`Config::MAX_RAY_CELLS`] (4096) cells: `max_range <= 4096 * cell_size`, because
+    /// the work of every free-space and rendering ray grows with its length in voxels (see
+    /// [`Config::MAX_RAY_CELLS`]).
     pub max_range: f32,
     /// How many of a point's labels vote in the class histogram (1..=3). Default 1.
     pub top_k: u8,
@@ -140,42 +149,119 @@ impl Config {
         self.cell_size / (1u32 << self.quant_bits.min(Self::MAX_QUANT_BITS)) as f32
     }
 
-    /// Checks every field; a map only ever holds a valid config.
+    /// Longest ray in cells: [`Config::max_range`] is at most `MAX_RAY_CELLS` times
+    /// [`Config::cell_size`] (409.6 m at 10 cm, 204.8 m at 5 cm, 4.096 m at the smallest
+    /// cell of 1 mm).
+    ///
+    /// The work of a frame grows with the length of its rays in voxels: every free-space
+    /// ray walks up to `max_range / cell_size` voxels (and may touch an occupancy block
+    /// every few of them), and so does every rendering ray. Without this bound a config
+    /// (or a snapshot's) with `max_range` = 10 km at 10 cm was valid, its rays as long as
+    /// the key range allows (tens of thousands of cells): a frame of 1000 points 2.8 km
+    /// away took 0.45 s to integrate (x86-64, release), against 0.06 s at this bound and
+    /// 2 ms at the default 20 m. 4096 cells keep a ray within an eighth of the key range
+    /// ([`crate::KEY_LIMIT`] cells from the origin on each axis), so a ray from a sensor
+    /// near the origin stays inside it, and leave room for long-range sensors at useful
+    /// cell sizes (a 200 m lidar at 5 cm).
+    pub const MAX_RAY_CELLS: u32 = 4096;
+
+    /// Checks every field; a map only ever holds a valid config. The error names the
+    /// first field, in the order of [`ConfigField::ALL`], that is out of its range.
     ///
     /// ```
-    /// let mut c = sndt_core::Config::DEFAULT;
+    /// use sndt_core::{Config, ConfigField, Error};
+    /// let mut c = Config::DEFAULT;
     /// c.cell_size = f32::NAN;
-    /// assert_eq!(c.validate(), Err(sndt_core::Error::InvalidConfig));
+    /// assert_eq!(c.validate(), Err(Error::InvalidConfig(ConfigField::CellSize)));
+    /// // 10 km rays at 10 cm are 100,000 cells: more than `MAX_RAY_CELLS`.
+    /// let mut c = Config::DEFAULT;
+    /// c.max_range = 10_000.0;
+    /// assert_eq!(c.validate(), Err(Error::InvalidConfig(ConfigField::RayCells)));
+    /// c.cell_size = 2.5; // 4000 cells of 2.5 m
+    /// assert!(c.validate().is_ok());
     /// ```
     pub const fn validate(&self) -> Result<(), Error> {
         const fn within(x: f32, lo: f32, hi: f32) -> bool {
             // False for NaN.
             x >= lo && x <= hi
         }
-        let ok = within(self.cell_size, 1e-3, 100.0)
-            && self.quant_bits >= 1
-            && self.quant_bits <= Self::MAX_QUANT_BITS
-            && self.n_min >= 2
-            && self.n_max >= self.n_min
-            && self.n_max <= 65535
-            && within(self.eigen_ratio, 1e-9, 0.5)
-            && within(self.hit, 0.0, 30.0)
-            && within(self.miss, -30.0, 0.0)
-            && within(self.clamp_min, -30.0, 0.0)
-            && within(self.clamp_max, 0.0, 30.0)
-            && within(self.lambda, 0.0, 0.49)
-            && within(self.noise_base, 1e-6, 1e3)
-            && within(self.noise_quadratic, 0.0, 1e3)
-            && within(self.max_range, 1e-3, 1e4)
-            && self.top_k >= 1
-            && self.top_k as usize <= MAX_TOP_K
-            && self.votes_per_frame >= 1
-            && self.votes_per_frame <= 64
-            && within(self.render_radius, 0.1, 10.0);
-        if ok {
-            Ok(())
-        } else {
-            Err(Error::InvalidConfig)
+        use ConfigField as F;
+        // In the order of `ConfigField::ALL`. `max_range <= MAX_RAY_CELLS * cell_size` is
+        // exact in f32 (a power-of-two multiple), and false for NaN.
+        let checks: [(bool, ConfigField); 17] = [
+            (within(self.cell_size, 1e-3, 100.0), F::CellSize),
+            (
+                self.quant_bits >= 1 && self.quant_bits <= Self::MAX_QUANT_BITS,
+                F::QuantBits,
+            ),
+            (self.n_min >= 2, F::NMin),
+            (within(self.eigen_ratio, 1e-9, 0.5), F::EigenRatio),
+            (self.n_max >= self.n_min && self.n_max <= 65535, F::NMax),
+            (within(self.hit, 0.0, 30.0), F::Hit),
+            (within(self.miss, -30.0, 0.0), F::Miss),
+            (within(self.clamp_min, -30.0, 0.0), F::ClampMin),
+            (within(self.clamp_max, 0.0, 30.0), F::ClampMax),
+            (within(self.lambda, 0.0, 0.49), F::Lambda),
+            (within(self.noise_base, 1e-6, 1e3), F::NoiseBase),
+            (within(self.noise_quadratic, 0.0, 1e3), F::NoiseQuadratic),
+            (within(self.max_range, 1e-3, 1e4), F::MaxRange),
+            (
+                self.max_range <= Self::MAX_RAY_CELLS as f32 * self.cell_size,
+                F::RayCells,
+            ),
+            (self.top_k >= 1 && self.top_k as usize <= MAX_TOP_K, F::TopK),
+            (
+                self.votes_per_frame >= 1 && self.votes_per_frame <= 64,
+                F::VotesPerFrame,
+            ),
+            (within(self.render_radius, 0.1, 10.0), F::RenderRadius),
+        ];
+        let mut i = 0;
+        while i < checks.len() {
+            if !checks[i].0 {
+                return Err(Error::InvalidConfig(checks[i].1));
+            }
+            i += 1;
+        }
+        Ok(())
+    }
+}
+
+// A ray of the longest length from a sensor at the origin stays inside the key range.
+const _: () = assert!(Config::MAX_RAY_CELLS < KEY_LIMIT as u32);
+
+/// The field and the range [`Config::validate`] wants it in, e.g. `cell_size must be a
+/// number of metres in [0.001, 100]`.
+impl fmt::Display for ConfigField {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let name = self.name();
+        match self {
+            ConfigField::CellSize => write!(f, "{name} must be a number of metres in [0.001, 100]"),
+            ConfigField::QuantBits => {
+                write!(f, "{name} must be in 1..={}", Config::MAX_QUANT_BITS)
+            }
+            ConfigField::NMin => write!(f, "{name} must be at least 2"),
+            ConfigField::EigenRatio => write!(f, "{name} must be in [1e-9, 0.5]"),
+            ConfigField::NMax => write!(f, "{name} must be in [n_min, 65535]"),
+            ConfigField::Hit => write!(f, "{name} must be in [0, 30]"),
+            ConfigField::Miss | ConfigField::ClampMin => write!(f, "{name} must be in [-30, 0]"),
+            ConfigField::ClampMax => write!(f, "{name} must be in [0, 30]"),
+            ConfigField::Lambda => write!(f, "{name} must be in [0, 0.49]"),
+            ConfigField::NoiseBase => {
+                write!(f, "{name} must be a number of metres in [1e-6, 1000]")
+            }
+            ConfigField::NoiseQuadratic => write!(f, "{name} must be in [0, 1000]"),
+            ConfigField::MaxRange => {
+                write!(f, "{name} must be a number of metres in [0.001, 10000]")
+            }
+            ConfigField::RayCells => write!(
+                f,
+                "{name} must be at most {} cells (one ray's length in voxels)",
+                Config::MAX_RAY_CELLS
+            ),
+            ConfigField::TopK => write!(f, "{name} must be in 1..={MAX_TOP_K}"),
+            ConfigField::VotesPerFrame => write!(f, "{name} must be in 1..=64"),
+            ConfigField::RenderRadius => write!(f, "{name} must be in [0.1, 10]"),
         }
     }
 }
@@ -214,7 +300,7 @@ mod tests {
     fn large_valid_hit_overflows_log_odds() {
         let mut cfg = Config::DEFAULT;
         cfg.hit = 3e6;
-        assert_eq!(cfg.validate(), Err(Error::InvalidConfig));
+        assert_eq!(cfg.validate(), Err(Error::InvalidConfig(ConfigField::Hit)));
         cfg.hit = 30.0;
         assert!(cfg.validate().is_ok());
         let mut map: Map<16, 16, 1> = Map::try_new(cfg).unwrap();
@@ -229,7 +315,7 @@ mod tests {
     fn large_valid_miss_overflows_log_odds() {
         let mut cfg = Config::DEFAULT;
         cfg.miss = -3e6;
-        assert_eq!(cfg.validate(), Err(Error::InvalidConfig));
+        assert_eq!(cfg.validate(), Err(Error::InvalidConfig(ConfigField::Miss)));
         cfg.miss = -30.0;
         assert!(cfg.validate().is_ok());
         let mut map: Map<16, 16, 1> = Map::try_new(cfg).unwrap();
@@ -237,5 +323,67 @@ mod tests {
         map.integrate(&Isometry3::identity(), &pts).unwrap();
         map.integrate(&Isometry3::identity(), &pts).unwrap();
         assert_eq!(map.log_odds(&key(0, 0, 5)), -2.0);
+    }
+
+    /// One config per field that breaks only that field (`ConfigField::ALL` order): the
+    /// error names it, and its message names the field and its range.
+    #[test]
+    fn every_field_is_named() {
+        let edits: [fn(&mut Config); 17] = [
+            |c| c.cell_size = 0.0,
+            |c| c.quant_bits = 7,
+            |c| c.n_min = 1,
+            |c| c.eigen_ratio = 0.0,
+            |c| c.n_max = 70_000,
+            |c| c.hit = -1.0,
+            |c| c.miss = 0.5,
+            |c| c.clamp_min = 0.5,
+            |c| c.clamp_max = -0.5,
+            |c| c.lambda = 0.5,
+            |c| c.noise_base = 0.0,
+            |c| c.noise_quadratic = -1.0,
+            |c| c.max_range = f32::INFINITY,
+            |c| c.max_range = 409.7, // 4097 cells of 10 cm
+            |c| c.top_k = 0,
+            |c| c.votes_per_frame = 65,
+            |c| c.render_radius = 11.0,
+        ];
+        for (edit, field) in edits.iter().zip(ConfigField::ALL) {
+            let mut c = Config::DEFAULT;
+            edit(&mut c);
+            assert_eq!(c.validate(), Err(Error::InvalidConfig(field)), "{c:?}");
+            let mut text = heapless::String::<128>::new();
+            core::fmt::write(&mut text, format_args!("{}", Error::InvalidConfig(field))).unwrap();
+            assert!(text.starts_with("invalid config: ") && text.contains(field.name()));
+            assert!(text.contains(" must be "), "{text}");
+        }
+    }
+
+    /// `max_range` may be exactly `MAX_RAY_CELLS` cells, not more, at any cell size; the
+    /// default and the fixtures' configs stay valid.
+    #[test]
+    fn ray_length_is_bounded_in_cells() {
+        for h in [0.001f32, 0.05, 0.1, 0.125, 2.5, 100.0] {
+            let mut c = Config::with_cell_size(h);
+            c.max_range = (Config::MAX_RAY_CELLS as f32 * h).min(1e4);
+            assert!(c.validate().is_ok(), "{h}");
+            if c.max_range < 1e4 {
+                c.max_range = f32::from_bits(c.max_range.to_bits() + 1);
+                let e = c.validate();
+                assert_eq!(e, Err(Error::InvalidConfig(ConfigField::RayCells)), "{h}");
+            }
+        }
+        assert!(Config::DEFAULT.validate().is_ok());
+        // 1 mm cells with the default 20 m range: 20,000 cells per ray.
+        let e = Config::with_cell_size(0.001).validate();
+        assert_eq!(e, Err(Error::InvalidConfig(ConfigField::RayCells)));
+    }
+
+    /// The error stays one byte: the field shares the byte with the other variants.
+    #[test]
+    fn error_is_one_byte() {
+        assert_eq!(core::mem::size_of::<Error>(), 1);
+        assert_eq!(core::mem::size_of::<ConfigField>(), 1);
+        assert_eq!(core::mem::size_of::<Result<(), Error>>(), 1);
     }
 }

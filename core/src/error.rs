@@ -1,12 +1,27 @@
 //! The crate's one error type.
 
-/// Everything that can go wrong. Small and `Copy`; bad input never panics and never loses
-/// what is already in the map.
+use core::fmt;
+
+/// Everything that can go wrong. Small and `Copy` (one byte: the field of
+/// [`Error::InvalidConfig`] shares it with the other variants); bad input never panics and
+/// never loses what is already in the map.
+///
+/// `Display` says what is wrong in a sentence, naming the config field and its range:
+///
+/// ```
+/// use sndt_core::{ConfigField, Error};
+/// assert_eq!(core::mem::size_of::<Error>(), 1);
+/// let e = Error::InvalidConfig(ConfigField::CellSize);
+/// assert_eq!(
+///     format!("{e}"),
+///     "invalid config: cell_size must be a number of metres in [0.001, 100]"
+/// );
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Error {
-    /// A [`crate::Config`] field is out of its documented range.
-    InvalidConfig,
+    /// A [`crate::Config`] field is out of its documented range: which one.
+    InvalidConfig(ConfigField),
     /// The sensor pose has a non-finite value or a rotation that is not orthonormal.
     InvalidPose,
     /// The sensor origin lies outside the key range.
@@ -29,6 +44,134 @@ pub enum Error {
     SnapshotCapacity,
     /// Snapshot: CRC-32 mismatch.
     SnapshotChecksum,
-    /// Snapshot: CRC matches but the content breaks an invariant.
+    /// Snapshot: CRC matches but the content breaks an invariant (among them a stored
+    /// config that [`crate::Config::validate`] refuses).
     SnapshotCorrupt,
+}
+
+/// The [`crate::Config`] field that [`crate::Config::validate`] refused: the first one, in
+/// the order of the struct, that is out of its range. [`ConfigField::RayCells`] is the one
+/// bound on two fields together (`max_range / cell_size`).
+///
+/// [`ConfigField::name`] is the field's name in the struct (and in the C API's
+/// `sndt_config`); `Display` says the field and its range, for example
+/// `max_range / cell_size must be at most 4096 cells (one ray's length in voxels)`.
+///
+/// ```
+/// use sndt_core::{Config, ConfigField, Error};
+/// let mut c = Config::DEFAULT;
+/// c.n_max = 1;
+/// assert_eq!(c.validate(), Err(Error::InvalidConfig(ConfigField::NMax)));
+/// assert_eq!(ConfigField::NMax.name(), "n_max");
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ConfigField {
+    /// [`crate::Config::cell_size`].
+    CellSize,
+    /// [`crate::Config::quant_bits`].
+    QuantBits,
+    /// [`crate::Config::n_min`].
+    NMin,
+    /// [`crate::Config::eigen_ratio`].
+    EigenRatio,
+    /// [`crate::Config::n_max`].
+    NMax,
+    /// [`crate::Config::hit`].
+    Hit,
+    /// [`crate::Config::miss`].
+    Miss,
+    /// [`crate::Config::clamp_min`].
+    ClampMin,
+    /// [`crate::Config::clamp_max`].
+    ClampMax,
+    /// [`crate::Config::lambda`].
+    Lambda,
+    /// [`crate::Config::noise_base`].
+    NoiseBase,
+    /// [`crate::Config::noise_quadratic`].
+    NoiseQuadratic,
+    /// [`crate::Config::max_range`] on its own.
+    MaxRange,
+    /// [`crate::Config::max_range`] in cells of [`crate::Config::cell_size`]: the longest
+    /// ray, [`crate::Config::MAX_RAY_CELLS`] at most.
+    RayCells,
+    /// [`crate::Config::top_k`].
+    TopK,
+    /// [`crate::Config::votes_per_frame`].
+    VotesPerFrame,
+    /// [`crate::Config::render_radius`].
+    RenderRadius,
+}
+
+impl ConfigField {
+    /// Every field, in the order [`crate::Config::validate`] checks them.
+    pub const ALL: [ConfigField; 17] = [
+        ConfigField::CellSize,
+        ConfigField::QuantBits,
+        ConfigField::NMin,
+        ConfigField::EigenRatio,
+        ConfigField::NMax,
+        ConfigField::Hit,
+        ConfigField::Miss,
+        ConfigField::ClampMin,
+        ConfigField::ClampMax,
+        ConfigField::Lambda,
+        ConfigField::NoiseBase,
+        ConfigField::NoiseQuadratic,
+        ConfigField::MaxRange,
+        ConfigField::RayCells,
+        ConfigField::TopK,
+        ConfigField::VotesPerFrame,
+        ConfigField::RenderRadius,
+    ];
+
+    /// The field's name in [`crate::Config`] (`max_range / cell_size` for
+    /// [`ConfigField::RayCells`]).
+    ///
+    /// ```
+    /// assert_eq!(sndt_core::ConfigField::CellSize.name(), "cell_size");
+    /// ```
+    pub const fn name(self) -> &'static str {
+        match self {
+            ConfigField::CellSize => "cell_size",
+            ConfigField::QuantBits => "quant_bits",
+            ConfigField::NMin => "n_min",
+            ConfigField::EigenRatio => "eigen_ratio",
+            ConfigField::NMax => "n_max",
+            ConfigField::Hit => "hit",
+            ConfigField::Miss => "miss",
+            ConfigField::ClampMin => "clamp_min",
+            ConfigField::ClampMax => "clamp_max",
+            ConfigField::Lambda => "lambda",
+            ConfigField::NoiseBase => "noise_base",
+            ConfigField::NoiseQuadratic => "noise_quadratic",
+            ConfigField::MaxRange => "max_range",
+            ConfigField::RayCells => "max_range / cell_size",
+            ConfigField::TopK => "top_k",
+            ConfigField::VotesPerFrame => "votes_per_frame",
+            ConfigField::RenderRadius => "render_radius",
+        }
+    }
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let what = match self {
+            Error::InvalidConfig(field) => return write!(f, "invalid config: {field}"),
+            Error::InvalidPose => "invalid pose: not finite, or its rotation is not orthonormal",
+            Error::PoseOutOfRange => "the sensor position is outside the map's key range",
+            Error::FrameTooLarge => "more points in one frame than MAX_FRAME_POINTS",
+            Error::InvalidImage => "image sizes disagree with the camera, or the camera is invalid",
+            Error::BufferTooSmall => "buffer too small",
+            Error::SnapshotTruncated => "snapshot truncated (its length disagrees with its header)",
+            Error::SnapshotMagic => "not a snapshot (wrong magic bytes)",
+            Error::SnapshotVersion => "snapshot of a version this build cannot read",
+            Error::SnapshotClasses => "snapshot of another class count",
+            Error::SnapshotCapacity => "snapshot holds more than this map's capacity",
+            Error::SnapshotChecksum => "snapshot CRC-32 mismatch",
+            Error::SnapshotCorrupt => "snapshot content is corrupt (or its config is invalid)",
+        };
+        f.write_str(what)
+    }
 }

@@ -700,7 +700,10 @@ mod tests {
         // lambda = 0.5 allowed p = 0 (logit -inf); now lambda <= 0.49, so p >= 0.01.
         let mut cfg = Config::with_cell_size(0.125);
         cfg.lambda = 0.5;
-        assert_eq!(cfg.validate(), Err(Error::InvalidConfig));
+        assert_eq!(
+            cfg.validate(),
+            Err(Error::InvalidConfig(ConfigField::Lambda))
+        );
         cfg.lambda = 0.49;
         assert!(cfg.validate().is_ok());
         let mut map: Map<16, 256, 1> = Map::try_new(cfg).unwrap();

@@ -32,7 +32,7 @@
 //!
 //! | module | what it holds |
 //! |---|---|
-//! | `error`, `labels` | [`Error`]; a point's top-k [`Labels`] and [`LabeledPoint`] |
+//! | `error`, `labels` | [`Error`] and the [`ConfigField`] it names; a point's top-k [`Labels`] and [`LabeledPoint`] |
 //! | `key` | [`VoxelKey`], packed table keys and the hash that orders them |
 //! | `crc`, `dda`, `sqrt`, `gaussian` | CRC-32; 3-D DDA voxel walk; the square root; [`Gaussian`], its prepared inverse with the eigenvalue floor |
 //! | `config`, `camera` | [`Config`]; [`Pinhole`], depth images, [`depth_point`], pose checks |
@@ -133,7 +133,7 @@ pub use camera::{
 };
 pub use config::{Config, MissModel, LOGODDS_ONE};
 pub use crc::Crc32;
-pub use error::Error;
+pub use error::{ConfigField, Error};
 pub use frame::{FrameReport, Phase, MAX_FRAME_POINTS};
 pub use free_space::voxels_on_segment;
 pub use gaussian::Gaussian;

@@ -447,8 +447,12 @@ mod tests {
     fn render_with_large_valid_max_range() {
         let mut cfg = Config::DEFAULT;
         cfg.max_range = 1e9;
-        assert_eq!(cfg.validate(), Err(Error::InvalidConfig));
-        cfg.max_range = 1e4; // the largest valid max range still renders
+        assert_eq!(
+            cfg.validate(),
+            Err(Error::InvalidConfig(ConfigField::MaxRange))
+        );
+        // The largest valid max range at 10 cm (`MAX_RAY_CELLS` cells) still renders.
+        cfg.max_range = Config::MAX_RAY_CELLS as f32 * cfg.cell_size;
         assert!(cfg.validate().is_ok());
         let mut map: Map<512, 256, 2> = Map::try_new(cfg).unwrap();
         let mut pts = [lp(0.0, 0.0, 0.0, 1); 400];

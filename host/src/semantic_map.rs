@@ -15,7 +15,7 @@
 //! render or ray casting into a frame's camera), and the evaluation's map capacity
 //! [`HostMap`].
 
-use crate::dataset::frame::{Frame, LabelSource, Rays};
+use crate::dataset::frame::{key_range_error, Frame, LabelSource, Rays};
 use anyhow::{anyhow, Result};
 use rayon::prelude::*;
 use sndt_core::{
@@ -125,7 +125,8 @@ pub fn boxed_map<const V: usize, const B: usize, const C: usize>(
         .spawn(move || Box::new(Map::new(config)))
         .expect("spawning the map allocation thread")
         .join()
-        .map_err(|_| sndt_core::Error::InvalidConfig)
+        // `Map::new` does not panic; should the thread fail anyway, its panic goes on here.
+        .map_or_else(|panic| std::panic::resume_unwind(panic), Ok)
 }
 
 /// Integrates one frame into `map` with labels from `source`: a pinhole frame as the core's
@@ -136,7 +137,15 @@ pub fn integrate_frame<const V: usize, const B: usize, const C: usize>(
     source: LabelSource,
     stride: u32,
 ) -> Result<sndt_core::FrameReport> {
-    let err = |e: sndt_core::Error| anyhow!("{}: integrate: {e:?}", frame.id);
+    let cell = map.config().cell_size;
+    let err = |e: sndt_core::Error| match e {
+        sndt_core::Error::PoseOutOfRange => anyhow!(
+            "{}: integrate: {}",
+            frame.id,
+            key_range_error(&frame.pose, cell).unwrap_or_else(|| e.to_string())
+        ),
+        e => anyhow!("{}: integrate: {e}", frame.id),
+    };
     match frame.rays.as_ref() {
         Rays::Pinhole(cam) => {
             let top1: Vec<u8>;

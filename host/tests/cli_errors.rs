@@ -1,6 +1,7 @@
 //! Bad command lines: each exits non-zero with a message that names the option or the file
 //! and says what is wrong.
 
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// Runs `sndt args`; returns the exit code and stderr.
@@ -73,4 +74,317 @@ fn missing_inputs_are_named() {
     let (code, err) = sndt(&["info", "no-such.mcap"]);
     assert_ne!(code, 0);
     assert!(err.contains("no-such.mcap"), "{err}");
+}
+
+/// Runs `sndt args`; returns the exit code, stdout and stderr.
+fn sndt_out(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_sndt"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// A fresh temporary directory for test `name`.
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("sndt-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A small prepared layout (64x48 synthetic frames with labels, no predictions):
+/// `scenes` scenes of `frames` frames each, in split `test`.
+fn prepared(name: &str, scenes: usize, frames: usize) -> PathBuf {
+    use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
+    use sndt_host::dataset::Dataset;
+    let root = temp_dir(name).join("data");
+    let camera = sndt_core::Pinhole {
+        fx: 40.0,
+        fy: 40.0,
+        cx: 32.0,
+        cy: 24.0,
+        width: 64,
+        height: 48,
+    };
+    let split = Synthetic::new(SynthOptions {
+        scenes,
+        frames,
+        camera,
+        predictions: false,
+        ..SynthOptions::default()
+    })
+    .unwrap();
+    for id in split.frames() {
+        let frame = split.load(id).unwrap();
+        sndt_host::dataset::prepared::write_frame(&root, "test", &frame).unwrap();
+    }
+    sndt_host::dataset::prepared::write_split_list(&root, "test", split.frames()).unwrap();
+    root
+}
+
+/// `sndt map DIR --out OUT extra...` on a prepared layout.
+fn map(root: &Path, extra: &[&str]) -> (i32, String, String) {
+    let out = root.with_file_name("out");
+    let mut args = vec![
+        "map",
+        root.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    sndt_out(&args)
+}
+
+/// Replaces `"key": <number>` in a JSON record by `"key": value`.
+fn set_json(path: &Path, key: &str, value: &str) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let at = text.find(&format!("\"{key}\"")).unwrap();
+    let colon = at + text[at..].find(':').unwrap();
+    let end = colon + text[colon..].find([',', '\n', '}']).unwrap();
+    let patched = format!("{}: {value}{}", &text[..colon], &text[end..]);
+    std::fs::write(path, patched).unwrap();
+}
+
+#[test]
+fn predicted_labels_without_predictions_are_an_error() {
+    let root = prepared("nopred", 1, 2);
+    let (code, out, err) = map(&root, &["--labels", "pred"]);
+    assert_eq!(code, 1, "{out}{err}");
+    let esanet = root.join("test").join("esanet");
+    assert!(
+        err.contains("--labels pred: ")
+            && err.contains("has no predictions: no ")
+            && err.contains(&format!("{} directory", esanet.display())),
+        "{err}"
+    );
+    assert!(!out.contains("mIoU"), "{out}");
+}
+
+#[test]
+fn a_split_without_frames_is_an_error() {
+    let root = prepared("empty", 1, 1);
+    std::fs::write(root.join("test.txt"), "# nothing\n").unwrap();
+    let (code, out, err) = map(&root, &[]);
+    assert_eq!(code, 1, "{out}{err}");
+    let list = root.join("test.txt");
+    assert!(
+        err.contains(&format!(
+            "{}: lists no frames (0 frames to map)",
+            list.display()
+        )),
+        "{err}"
+    );
+    assert!(!out.contains("Hz"), "{out}");
+}
+
+#[test]
+fn a_missing_intrinsics_file_is_a_warning_and_counted() {
+    let root = prepared("intrinsics", 2, 1);
+    let missing = root
+        .join("test/intrinsics/synth_01_bedroom")
+        .join("cam_00.json");
+    std::fs::remove_file(&missing).unwrap();
+    let (code, out, err) = map(&root, &[]);
+    // The nominal camera is 1024x768: the 64x48 frame of that camera is skipped.
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        err.contains(&format!(
+            "warning: {}: no such file; this camera uses the nominal Hypersim camera",
+            missing.display()
+        )),
+        "{err}"
+    );
+    assert!(
+        out.contains("1 of 2 cameras have no intrinsics file and use the nominal Hypersim camera"),
+        "{out}"
+    );
+    assert!(out.contains("1 frames mapped, 1 skipped"), "{out}");
+    assert!(err.contains("depth is 64x48, camera (the nominal Hypersim camera) is 1024x768"));
+}
+
+#[test]
+fn bad_intrinsics_are_an_error_naming_the_file_and_field() {
+    let root = prepared("fx", 1, 1);
+    let file = root.join("test/intrinsics/synth_00_living/cam_00.json");
+    for (value, why) in [
+        ("0", "fx = 0, must be > 0"),
+        ("-3.5", "fx = -3.5, must be > 0"),
+        ("1e39", "fx = 1e39 is not finite as f32"),
+    ] {
+        set_json(&file, "fx", value);
+        let (code, out, err) = map(&root, &[]);
+        assert_eq!(code, 1, "{out}{err}");
+        assert!(err.contains(&format!("{}: {why}", file.display())), "{err}");
+    }
+}
+
+#[test]
+fn bad_extrinsics_are_skipped_naming_the_file_value_and_range() {
+    let root = prepared("extrinsics", 1, 3);
+    let file = root.join("test/extrinsics/synth_00_living/cam_00/0002.json");
+    set_json(&file, "x", "1e39");
+    let (code, out, err) = map(&root, &[]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        err.contains(&format!(
+            "warning: skipping frame synth_00_living/cam_00/0002: {}: position x = 1e39 is not finite as f32",
+            file.display()
+        )),
+        "{err}"
+    );
+    assert!(out.contains("cam_00: 2 frames, 1 skipped"), "{out}");
+    assert!(out.contains("2 frames mapped, 1 skipped"), "{out}");
+
+    set_json(&file, "x", "1e7");
+    let (code, out, err) = map(&root, &[]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        err.contains(&format!(
+            "{}: position x = 1e7 m is outside the map's key range (±32767 cells of 0.1 m, about ±3276.7 m)",
+            file.display()
+        )),
+        "{err}"
+    );
+    assert!(out.contains("2 frames mapped, 1 skipped"), "{out}");
+}
+
+#[test]
+fn bad_frames_are_skipped_and_a_run_without_any_fails() {
+    let root = prepared("corrupt", 1, 3);
+    let png = root.join("test/depth/synth_00_living/cam_00/0001.png");
+    std::fs::write(&png, b"not a PNG").unwrap();
+    let (code, out, err) = map(&root, &[]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        err.contains(&format!(
+            "warning: skipping frame synth_00_living/cam_00/0001: {}: not a readable PNG",
+            png.display()
+        )),
+        "{err}"
+    );
+    assert!(out.contains("2 frames mapped, 1 skipped"), "{out}");
+    // Nothing usable left: an error, with the last reason.
+    for k in [0, 2] {
+        let p = png.with_file_name(format!("{k:04}.png"));
+        std::fs::write(p, b"").unwrap();
+    }
+    let (code, out, err) = map(&root, &[]);
+    assert_eq!(code, 1, "{out}{err}");
+    assert!(
+        err.contains("nothing mapped: all 3 frames were skipped (the last: ")
+            && err.contains("0002.png: not a readable PNG"),
+        "{err}"
+    );
+    assert!(!out.contains("mIoU"), "{out}");
+}
+
+#[test]
+fn config_errors_name_the_option_and_the_field() {
+    let cases: [(&[&str], &str); 3] = [
+        (
+            &["map", "synthetic:1:2", "--cell", "1000"],
+            "--cell 1000: invalid config: cell_size must be a number of metres in [0.001, 100]",
+        ),
+        (
+            &["map", "synthetic:1:2", "--cell", "0.001"],
+            "--cell 0.001: invalid config: max_range / cell_size must be at most 4096 cells \
+             (one ray's length in voxels); max_range 20 m is 20000 cells of 0.001 m",
+        ),
+        (
+            &["map", "synthetic:1:2", "--votes-per-frame", "0"],
+            "--votes-per-frame 0: invalid config: votes_per_frame must be in 1..=64",
+        ),
+    ];
+    for (args, message) in cases {
+        let (code, _, err) = sndt_out(args);
+        assert_eq!(code, 1, "{args:?}: {err}");
+        assert!(err.contains(message), "{args:?}: {err}");
+    }
+}
+
+/// A snapshot whose config has a 10 km `max_range` at 10 cm (100,000 cells per ray) is
+/// refused on load, naming the file and the bound.
+#[test]
+fn a_snapshot_with_an_absurd_max_range_is_refused() {
+    let dir = temp_dir("snapshot");
+    let map = sndt_host::semantic_map::boxed_map::<64, 16, 40>(sndt_core::Config::DEFAULT).unwrap();
+    let mut bytes = vec![0; map.snapshot_len()];
+    map.write_snapshot(&mut bytes).unwrap();
+    bytes[52..56].copy_from_slice(&1e4f32.to_le_bytes());
+    let n = bytes.len() - 4;
+    let mut crc = sndt_core::Crc32::new();
+    crc.update(&bytes[..n]);
+    let crc = crc.finish().to_le_bytes();
+    bytes[n..].copy_from_slice(&crc);
+    let file = dir.join("far.sndt");
+    std::fs::write(&file, &bytes).unwrap();
+    let ply = dir.join("far.ply");
+    let (code, _, err) = sndt_out(&[
+        "export",
+        file.to_str().unwrap(),
+        "--ply",
+        ply.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains(&format!(
+            "{}: not a readable sndt snapshot: its stored config is refused: invalid config: \
+             max_range / cell_size must be at most 4096 cells",
+            file.display()
+        )),
+        "{err}"
+    );
+    assert!(!ply.exists());
+}
+
+#[test]
+fn testvector_check_needs_its_crc_files_and_names_the_file() {
+    let dir = temp_dir("testvector");
+    let committed = Path::new(env!("CARGO_MANIFEST_DIR")).join("../targets/cortex-m4f/vector");
+    let vector = dir.join("frames.bin");
+    std::fs::copy(committed.join("frames.bin"), &vector).unwrap();
+    let check = |file: &Path| sndt_out(&["testvector", "--check", file.to_str().unwrap()]);
+    let (code, _, err) = check(&vector);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains(&format!(
+            "{}: no such file: the expected snapshot CRC of {}",
+            dir.join("expected_crc.txt").display(),
+            vector.display()
+        )),
+        "{err}"
+    );
+    std::fs::copy(
+        committed.join("expected_crc.txt"),
+        dir.join("expected_crc.txt"),
+    )
+    .unwrap();
+    let (code, _, err) = check(&vector);
+    assert_eq!(code, 1, "{err}");
+    let render = dir.join("expected_render_crc.txt");
+    assert!(
+        err.contains(&format!("{}: no such file", render.display())),
+        "{err}"
+    );
+    std::fs::write(&render, "0x00000000\n").unwrap();
+    let (code, _, err) = check(&vector);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains(&format!("{}: render CRC", vector.display()))
+            && err.contains(&format!("differs from {}", render.display())),
+        "{err}"
+    );
+    std::fs::copy(committed.join("expected_render_crc.txt"), &render).unwrap();
+    let (code, out, err) = check(&vector);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("crc 0x"), "{out}");
+    std::fs::write(&vector, b"SNDTVEC\0 but short").unwrap();
+    let (code, _, err) = check(&vector);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains(&format!("{}: ", vector.display())), "{err}");
 }

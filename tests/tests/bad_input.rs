@@ -2,9 +2,9 @@
 //! loses what is already in the map.
 
 use sndt_core::{
-    pose_from_matrix, Config, DepthImage, DepthKind, Error, Isometry3, LabelImage, LabeledPoint,
-    Labels, Map, Matrix3, Occupancy, Pinhole, Point3, Translation3, UnitQuaternion, Vector3,
-    MAX_FRAME_POINTS,
+    pose_from_matrix, Config, ConfigField, DepthImage, DepthKind, Error, Isometry3, LabelImage,
+    LabeledPoint, Labels, Map, Matrix3, Occupancy, Pinhole, Point3, Translation3, UnitQuaternion,
+    Vector3, MAX_FRAME_POINTS,
 };
 use sndt_tests::*;
 
@@ -348,31 +348,53 @@ fn oversized_frames_are_errors() {
 }
 
 #[test]
-fn invalid_configs_are_errors() {
+fn invalid_configs_are_errors_naming_the_field() {
     let mut map = populated();
     let mut bad = Vec::new();
-    for edit in [
-        |c: &mut Config| c.cell_size = 0.0,
-        |c: &mut Config| c.cell_size = f32::INFINITY,
-        |c: &mut Config| c.quant_bits = 7,
-        |c: &mut Config| c.quant_bits = 0,
-        |c: &mut Config| c.n_min = 1,
-        |c: &mut Config| c.n_max = 70_000,
-        |c: &mut Config| c.hit = -1.0,
-        |c: &mut Config| c.miss = 0.5,
-        |c: &mut Config| c.lambda = 0.6,
-        |c: &mut Config| c.top_k = 4,
-        |c: &mut Config| c.max_range = f32::NAN,
-    ] {
+    type Edit = (fn(&mut Config), ConfigField);
+    let edits: [Edit; 12] = [
+        (|c| c.cell_size = 0.0, ConfigField::CellSize),
+        (|c| c.cell_size = f32::INFINITY, ConfigField::CellSize),
+        (|c| c.quant_bits = 7, ConfigField::QuantBits),
+        (|c| c.quant_bits = 0, ConfigField::QuantBits),
+        (|c| c.n_min = 1, ConfigField::NMin),
+        (|c| c.n_max = 70_000, ConfigField::NMax),
+        (|c| c.hit = -1.0, ConfigField::Hit),
+        (|c| c.miss = 0.5, ConfigField::Miss),
+        (|c| c.lambda = 0.6, ConfigField::Lambda),
+        (|c| c.top_k = 4, ConfigField::TopK),
+        (|c| c.max_range = f32::NAN, ConfigField::MaxRange),
+        // 10 km rays of 10 cm cells: valid once, now more than MAX_RAY_CELLS cells.
+        (|c| c.max_range = 1e4, ConfigField::RayCells),
+    ];
+    for (edit, field) in edits {
         let mut c = Config::DEFAULT;
         edit(&mut c);
-        bad.push(c);
+        bad.push((c, field));
     }
-    for c in bad {
-        assert_eq!(c.validate(), Err(Error::InvalidConfig), "{c:?}");
-        assert!(Map::<8, 8, 2>::try_new(c).is_err());
-        assert_untouched(&mut map, Error::InvalidConfig, |m| m.reset(c));
+    for (c, field) in bad {
+        let e = Error::InvalidConfig(field);
+        assert_eq!(c.validate(), Err(e), "{c:?}");
+        assert_eq!(Map::<8, 8, 2>::try_new(c).err(), Some(e));
+        assert_untouched(&mut map, e, |m| m.reset(c));
+        let text = e.to_string();
+        assert!(
+            text.contains(field.name()) && text.contains(" must be "),
+            "{text}"
+        );
     }
+}
+
+/// The error type's memory contract: one byte, `Copy`, with the field inside.
+#[test]
+fn error_is_one_copy_byte() {
+    fn copy<T: Copy>(t: T) -> (T, T) {
+        (t, t)
+    }
+    assert_eq!(std::mem::size_of::<Error>(), 1);
+    assert_eq!(std::mem::size_of::<Option<Error>>(), 1);
+    let (a, b) = copy(Error::InvalidConfig(ConfigField::RayCells));
+    assert_eq!(a, b);
 }
 
 /// `Map::new` is documented to replace an invalid config by `Config::DEFAULT` (map.rs), and
@@ -385,11 +407,12 @@ fn map_new_replaces_every_invalid_config() {
         |c: &mut Config| c.clamp_min = 1.0,
         |c: &mut Config| c.lambda = 0.6,
         |c: &mut Config| c.max_range = f32::NAN,
+        |c: &mut Config| c.max_range = 1e4,
         |c: &mut Config| c.eigen_ratio = 2.0,
     ] {
         let mut c = Config::DEFAULT;
         edit(&mut c);
-        assert_eq!(c.validate(), Err(Error::InvalidConfig));
+        assert!(matches!(c.validate(), Err(Error::InvalidConfig(_))));
         assert_eq!(
             Map::<8, 8, 2>::new(c).config(),
             &Config::DEFAULT,
@@ -398,7 +421,32 @@ fn map_new_replaces_every_invalid_config() {
     }
 }
 
-/// An inverted log-odds clamp passed to `Map::new` must not make integration panic.
+/// A snapshot whose stored config breaks a bound (here `max_range` = 10 km at 10 cm, once
+/// valid, now more than `Config::MAX_RAY_CELLS` cells per ray) is refused on load, with a
+/// matching CRC, and the map keeps its content.
+#[test]
+fn snapshot_with_absurd_max_range_is_refused() {
+    let mut map = populated();
+    let mut bytes = snapshot(&*map);
+    // max_range: the tenth f32 of the header's config (offset 16 + 9 * 4).
+    bytes[52..56].copy_from_slice(&1e4f32.to_le_bytes());
+    let n = bytes.len() - 4;
+    let mut crc = sndt_core::Crc32::new();
+    crc.update(&bytes[..n]);
+    let crc = crc.finish();
+    bytes[n..].copy_from_slice(&crc.to_le_bytes());
+    assert_untouched(&mut map, Error::SnapshotCorrupt, |m| {
+        m.read_snapshot(&bytes)
+    });
+    // The same bytes with the old 20 m read back.
+    bytes[52..56].copy_from_slice(&20f32.to_le_bytes());
+    let mut crc = sndt_core::Crc32::new();
+    crc.update(&bytes[..n]);
+    let crc = crc.finish();
+    bytes[n..].copy_from_slice(&crc.to_le_bytes());
+    map.read_snapshot(&bytes).unwrap();
+}
+
 #[test]
 fn map_new_with_inverted_clamp_does_not_panic() {
     let mut c = Config::DEFAULT;

@@ -67,9 +67,14 @@ pub fn budget(a: &BudgetArgs) -> Result<String> {
         return Ok(s);
     };
     let config = Config::with_cell_size(cell);
-    config
-        .validate()
-        .map_err(|_| anyhow::anyhow!("--cell {cell} is not a valid cell size"))?;
+    let option = format!("--cell {cell}");
+    super::parse::check_config(
+        &config,
+        &[
+            (sndt_core::ConfigField::CellSize, &option),
+            (sndt_core::ConfigField::RayCells, &option),
+        ],
+    )?;
     let Some(cap) = pick_capacity(capacity, blocks) else {
         bail!(
             "no compiled capacity holds {capacity} voxels and {blocks} blocks (largest: {:?})",

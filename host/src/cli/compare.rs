@@ -89,6 +89,7 @@ pub fn frame_range(spec: Option<&str>, len: usize) -> Result<std::ops::Range<usi
 pub fn compare_report(args: &CompareArgs) -> Result<Report> {
     let labels = LabelSource::from(args.labels);
     let data = open_dataset(args, labels)?;
+    super::labels::check_labels(args.labels, data.as_ref(), &args.dataset)?;
     let trajectories = data.trajectories();
     let (name, ids) = match &args.trajectory {
         None => trajectories.first(),
@@ -149,9 +150,14 @@ fn configs(cells: &[f32], constant_miss: bool) -> Result<Vec<Config>> {
             if constant_miss {
                 config.miss_model = MissModel::Constant;
             }
-            config
-                .validate()
-                .map_err(|_| anyhow::anyhow!("--cell {c}: not a valid cell size"))?;
+            let option = format!("--cell {c}");
+            super::parse::check_config(
+                &config,
+                &[
+                    (sndt_core::ConfigField::CellSize, &option),
+                    (sndt_core::ConfigField::RayCells, &option),
+                ],
+            )?;
             Ok(config)
         })
         .collect()

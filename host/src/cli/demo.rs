@@ -57,8 +57,16 @@ struct Runs {
 /// Runs the demo and prints its report.
 pub fn run(a: &DemoArgs) -> Result<()> {
     let start = Instant::now();
-    let split = walk_split(a)?;
     let config = map_config(a);
+    let option = format!("--cell {}", a.cell);
+    super::parse::check_config(
+        &config,
+        &[
+            (sndt_core::ConfigField::CellSize, &option),
+            (sndt_core::ConfigField::RayCells, &option),
+        ],
+    )?;
+    let split = walk_split(a)?;
     println!(
         "sndt demo: {}, cell {:.0} cm, {} miss",
         split.describe(),

@@ -3,10 +3,10 @@
 //! for Foxglove and RViz, from a saved snapshot or from mapping a dataset's first
 //! trajectory (then, with `--every N`, the bag holds the map as it grows).
 
-use crate::cli::labels::LabelArg;
-use crate::dataset::frame::LabelSource;
+use crate::cli::labels::{check_labels, LabelArg};
+use crate::cli::parse::check_config;
 use crate::dataset::open::open_spec;
-use crate::dataset::source::OpenOptions;
+use crate::dataset::source::{usable_frames, OpenOptions};
 use crate::eval::evaluate::load_snapshot;
 use crate::output::export::{ellipsoids, write_ellipsoids, write_points};
 use crate::output::progress::progress;
@@ -15,7 +15,7 @@ use crate::ros::msgs::Time;
 use crate::ros::write::frame_time;
 use crate::semantic_map::{integrate_frame, HostMap};
 use anyhow::Result;
-use sndt_core::Config;
+use sndt_core::{Config, ConfigField};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `sndt export`.
@@ -69,7 +69,7 @@ pub fn run(a: &ExportArgs) -> Result<()> {
     let map = if is_snapshot {
         load_snapshot(path)?
     } else {
-        map_first_trajectory(&a.input, a.cell, a.labels.into(), a.every, bag.as_mut())?
+        map_first_trajectory(&a.input, a.cell, a.labels, a.every, bag.as_mut())?
     };
     if let (Some(b), Some(p)) = (bag, &a.mcap) {
         let snapshots = b.written;
@@ -102,36 +102,65 @@ fn write_ply(ply: &Path, map: &HostMap, a: &ExportArgs) -> Result<()> {
     Ok(())
 }
 
-/// Maps the first trajectory of the dataset `spec` at `cell` with `labels`; with a bag,
-/// writes the map into it every `every` frames (if given) and at the end, stamped with the
-/// frame's recording time (or 10 Hz from 1 s when the dataset has none).
+/// Maps the first trajectory of the dataset `spec` at `cell` with `labels`, skipping bad
+/// frames with a warning ([`usable_frames`]); with a bag, writes the map into it every
+/// `every` frames (if given) and after the last frame mapped, stamped with the frame's
+/// recording time (or 10 Hz from 1 s when the dataset has none). Fails when no frame
+/// could be mapped.
 fn map_first_trajectory(
     spec: &str,
     cell: f32,
-    labels: LabelSource,
+    labels: LabelArg,
     every: Option<usize>,
     mut bag: Option<&mut MapBag>,
 ) -> Result<Box<HostMap>> {
+    let config = Config::with_cell_size(cell);
+    let option = format!("--cell {cell}");
+    let fields = [
+        (ConfigField::CellSize, &*option),
+        (ConfigField::RayCells, &*option),
+    ];
+    check_config(&config, &fields)?;
     let dataset = open_spec(spec, &OpenOptions::default())?;
+    check_labels(labels, dataset.as_ref(), spec)?;
     let trajectories = dataset.trajectories();
     let (name, ids) = trajectories
         .first()
         .ok_or_else(|| anyhow::anyhow!("{spec}: no frames"))?;
-    let mut map: Box<HostMap> = crate::semantic_map::boxed_map(Config::with_cell_size(cell))
-        .map_err(|e| anyhow::anyhow!("config: {e:?}"))?;
+    let mut map: Box<HostMap> =
+        crate::semantic_map::boxed_map(config).map_err(|e| anyhow::anyhow!("config: {e}"))?;
     let bar = progress(ids.len() as u64, "map");
-    for (k, id) in ids.iter().enumerate() {
-        integrate_frame(map.as_mut(), &dataset.load(id)?, labels, 1)?;
-        let last = k + 1 == ids.len();
+    let (mut skipped, mut mapped, mut unwritten) = (Vec::new(), 0, None);
+    for frame in usable_frames(dataset.as_ref(), ids, cell, &mut skipped) {
+        let frame = frame?;
+        integrate_frame(map.as_mut(), &frame, labels.into(), 1)?;
+        mapped += 1;
+        let k = ids.iter().position(|id| *id == frame.id).unwrap_or(0);
+        let stamp = dataset
+            .stamp(&frame.id)
+            .map_or(frame_time(k), Time::from_nanos);
+        unwritten = Some(stamp);
         if let Some(b) = bag.as_deref_mut() {
-            if last || every.is_some_and(|n| (k + 1) % n == 0) {
-                let stamp = dataset.stamp(id).map_or(frame_time(k), Time::from_nanos);
+            if every.is_some_and(|n| (k + 1) % n == 0) {
                 b.write(map.as_ref(), stamp)?;
+                unwritten = None;
             }
         }
         bar.inc(1);
     }
     bar.finish_and_clear();
-    println!("mapped {name}: {} frames", ids.len());
+    if let (Some(b), Some(stamp)) = (bag, unwritten) {
+        b.write(map.as_ref(), stamp)?;
+    }
+    if mapped == 0 {
+        let why = skipped
+            .last()
+            .map_or(String::new(), |b| format!(" (the last: {})", b.why));
+        anyhow::bail!(
+            "nothing mapped: all {} frames of {name} were skipped{why}",
+            ids.len()
+        );
+    }
+    println!("mapped {name}: {mapped} frames, {} skipped", skipped.len());
     Ok(map)
 }

@@ -1,6 +1,8 @@
 //! `--labels`: the command line's name for [`LabelSource`], so that clap stays in `cli`.
 
 use crate::dataset::frame::LabelSource;
+use crate::dataset::source::Dataset;
+use clap::ValueEnum;
 
 /// Which labels to attach to points (`--labels` of `map`, `export` and `compare`); the
 /// variants, their spelling (`gt`, `pred`, `pred-topk`, `none`) and their help are those of
@@ -28,10 +30,33 @@ impl From<LabelArg> for LabelSource {
     }
 }
 
+/// Refuses `--labels pred` / `pred-topk` for a dataset without predictions (the map would
+/// get no labels and score 0 %): the message says where predictions were looked for.
+///
+/// ```
+/// use sndt_host::cli::labels::{check_labels, LabelArg};
+/// use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
+/// let plain = Synthetic::new(SynthOptions { scenes: 1, frames: 1, predictions: false, ..Default::default() }).unwrap();
+/// let e = check_labels(LabelArg::Pred, &plain, "synthetic").unwrap_err();
+/// assert!(e.to_string().starts_with("--labels pred: synthetic has no predictions"));
+/// assert!(check_labels(LabelArg::Gt, &plain, "synthetic").is_ok());
+/// ```
+pub fn check_labels(labels: LabelArg, dataset: &dyn Dataset, name: &str) -> anyhow::Result<()> {
+    if matches!(labels, LabelArg::Pred | LabelArg::PredTopk) {
+        if let Some(place) = dataset.missing_predictions() {
+            let option = labels.to_possible_value().map(|v| v.get_name().to_string());
+            anyhow::bail!(
+                "--labels {}: {name} has no predictions: {place}",
+                option.unwrap_or_default()
+            );
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use clap::ValueEnum;
 
     #[test]
     fn every_label_source_has_its_own_spelling() {

@@ -1,14 +1,15 @@
 //! `sndt map`: map every trajectory of a dataset and evaluate the back-projections with the
 //! paper's evaluation protocol (docs/ARCHITECTURE.md).
 
-use crate::cli::labels::LabelArg;
+use crate::cli::labels::{check_labels, LabelArg};
 use crate::cli::open_args::OpenArgs;
+use crate::cli::parse::check_config;
 use crate::dataset::frame::LabelSource;
 use crate::dataset::open::open_spec;
 use crate::eval::evaluate::{evaluate, EvalOptions, Evaluation};
 use crate::output::progress::progress;
 use anyhow::{Context, Result};
-use sndt_core::Config;
+use sndt_core::{Config, ConfigField};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `sndt map`.
@@ -49,10 +50,29 @@ pub struct MapArgs {
 }
 
 /// Runs `sndt map`: maps and evaluates every trajectory, prints the per-trajectory lines
-/// and the metrics table, and writes metrics.md and metrics.json beside the pictures.
+/// (with the frames skipped for bad input) and the metrics table, and writes metrics.md
+/// and metrics.json beside the pictures. Fails on a config the options make invalid, on
+/// predicted labels asked of a dataset without them, and when no frame could be mapped.
 pub fn run(a: &MapArgs) -> Result<()> {
     let labels = LabelSource::from(a.labels);
+    let config = Config {
+        votes_per_frame: a.votes_per_frame,
+        ..Config::with_cell_size(a.cell)
+    };
+    let (cell, votes) = (
+        format!("--cell {}", a.cell),
+        format!("--votes-per-frame {}", a.votes_per_frame),
+    );
+    check_config(
+        &config,
+        &[
+            (ConfigField::CellSize, &cell),
+            (ConfigField::RayCells, &cell),
+            (ConfigField::VotesPerFrame, &votes),
+        ],
+    )?;
     let dataset = open_spec(&a.dataset, &a.open.options()?)?;
+    check_labels(a.labels, dataset.as_ref(), &a.dataset)?;
     println!("sndt map: {}", dataset.describe());
     let frames = dataset.frames().len();
     let bar = progress(2 * frames as u64, "map+eval");
@@ -65,28 +85,28 @@ pub fn run(a: &MapArgs) -> Result<()> {
             mcap: a.mcap.clone(),
             mcap_every: a.every,
             mcap_world: a.open.world_frame.clone(),
-            ..EvalOptions::new(
-                Config {
-                    votes_per_frame: a.votes_per_frame,
-                    ..Config::with_cell_size(a.cell)
-                },
-                labels,
-            )
+            ..EvalOptions::new(config, labels)
         },
         &|| bar.inc(1),
     )?;
     bar.finish_and_clear();
     for t in &eval.trajectories {
         println!(
-            "  {}: {} frames, {:.1} ms/frame, {} voxels, {} blocks, {} evicted",
+            "  {}: {} frames, {} skipped, {:.1} ms/frame, {} voxels, {} blocks, {} evicted",
             t.name,
             t.frames,
+            t.skipped,
             t.mean_ms(),
             t.voxels,
             t.blocks,
             t.evicted
         );
     }
+    println!(
+        "{} frames mapped, {} skipped (bad input, named in the warnings)",
+        eval.frames(),
+        eval.skipped()
+    );
     let table = eval.table();
     println!(
         "\ncell {:.0} cm, {:?} labels\n{table}",

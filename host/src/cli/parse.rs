@@ -48,3 +48,45 @@ pub fn at_least_one(s: &str) -> Result<usize, String> {
         Err(_) => Err("not a whole number >= 1".into()),
     }
 }
+
+/// Checks a config built from options, naming the option behind a refused field:
+/// `options` pairs each field an option sets with the option as typed (`--cell 0.001`).
+/// A field no option sets is named as the field.
+///
+/// ```
+/// use sndt_core::{Config, ConfigField};
+/// use sndt_host::cli::parse::check_config;
+/// let fields = [(ConfigField::CellSize, "--cell 0.001"), (ConfigField::RayCells, "--cell 0.001")];
+/// let e = check_config(&Config::with_cell_size(0.001), &fields).unwrap_err();
+/// assert_eq!(
+///     e.to_string(),
+///     "--cell 0.001: invalid config: max_range / cell_size must be at most 4096 cells \
+///      (one ray's length in voxels); max_range 20 m is 20000 cells of 0.001 m"
+/// );
+/// assert!(check_config(&Config::DEFAULT, &fields).is_ok());
+/// ```
+pub fn check_config(
+    config: &sndt_core::Config,
+    options: &[(sndt_core::ConfigField, &str)],
+) -> anyhow::Result<()> {
+    use sndt_core::{ConfigField, Error};
+    let Err(e) = config.validate() else {
+        return Ok(());
+    };
+    let Error::InvalidConfig(field) = e else {
+        anyhow::bail!("config: {e}");
+    };
+    let detail = match field {
+        ConfigField::RayCells => format!(
+            "; max_range {} m is {:.0} cells of {} m",
+            config.max_range,
+            config.max_range / config.cell_size,
+            config.cell_size
+        ),
+        _ => String::new(),
+    };
+    match options.iter().find(|(f, _)| *f == field) {
+        Some((_, option)) => anyhow::bail!("{option}: {e}{detail}"),
+        None => anyhow::bail!("config: {e}{detail}"),
+    }
+}

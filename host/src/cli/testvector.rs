@@ -4,7 +4,7 @@
 use crate::embedded::testvector::{
     generate, parse_crc, run as integrate, summary, write, TestVector,
 };
-use anyhow::{bail, ensure, Context, Result};
+use anyhow::{anyhow, bail, ensure, Context, Result};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `sndt testvector`.
@@ -26,7 +26,8 @@ pub fn run(a: &TestvectorArgs) -> Result<()> {
 
 /// `--out DIR` writes `DIR/frames.bin` and `DIR/expected_crc.txt`; `--check FILE`
 /// integrates a vector and returns the summary (last line `crc 0x........`), failing when
-/// `expected_crc.txt` beside it disagrees or a probe misses.
+/// `expected_crc.txt` or `expected_render_crc.txt` beside it is missing or disagrees, or a
+/// probe misses.
 pub fn testvector(out: Option<&Path>, check: Option<&Path>) -> Result<String> {
     match (out, check) {
         (Some(dir), None) => write_vector(dir),
@@ -48,33 +49,37 @@ fn write_vector(dir: &Path) -> Result<String> {
 }
 
 /// Integrates the vector in `file` and checks its probes and its snapshot and render CRCs
-/// against `expected_crc.txt` and `expected_render_crc.txt` beside it (a missing file is
-/// said in the summary, not silently skipped).
+/// against `expected_crc.txt` and `expected_render_crc.txt` beside it (both written by
+/// `--out`). A missing or unreadable CRC file, a probe that misses and a CRC that differs
+/// are errors; every error names the file it concerns.
 fn check_vector(file: &Path) -> Result<String> {
-    let bytes = std::fs::read(file).with_context(|| format!("reading {}", file.display()))?;
-    let v = TestVector::parse(&bytes).with_context(|| format!("{}", file.display()))?;
-    let r = integrate(&v).with_context(|| format!("{}", file.display()))?;
-    let mut s = summary(&v, &r);
-    if let Some(p) = r.probes.iter().find(|p| !p.ok()) {
-        bail!("{s}probe {:?} is wrong", p.pixel);
+    let shown = file.display();
+    let bytes = std::fs::read(file).with_context(|| format!("reading {shown}"))?;
+    let v = TestVector::parse(&bytes).map_err(|e| anyhow!("{shown}: {e:#}"))?;
+    let expected = [
+        ("expected_crc.txt", "snapshot"),
+        ("expected_render_crc.txt", "render"),
+    ]
+    .map(|(name, what)| (file.with_file_name(name), what));
+    for (txt, what) in &expected {
+        ensure!(
+            txt.is_file(),
+            "{}: no such file: the expected {what} CRC of {shown} (written by --out) is needed to check it",
+            txt.display()
+        );
     }
-    for (name, got) in [
-        ("expected_crc.txt", r.crc),
-        ("expected_render_crc.txt", r.view.crc),
-    ] {
-        let txt = file.with_file_name(name);
-        if !txt.is_file() {
-            s.push_str(&format!(
-                "(no {} beside the vector: not compared)\n",
-                txt.display()
-            ));
-            continue;
-        }
-        let want = parse_crc(&std::fs::read_to_string(&txt)?)
-            .with_context(|| format!("{}", txt.display()))?;
+    let r = integrate(&v).map_err(|e| anyhow!("{shown}: {e:#}"))?;
+    let s = summary(&v, &r);
+    if let Some(p) = r.probes.iter().find(|p| !p.ok()) {
+        bail!("{s}{shown}: probe {:?} is wrong", p.pixel);
+    }
+    for ((txt, what), got) in expected.iter().zip([r.crc, r.view.crc]) {
+        let text =
+            std::fs::read_to_string(txt).with_context(|| format!("reading {}", txt.display()))?;
+        let want = parse_crc(&text).map_err(|e| anyhow!("{}: {e:#}", txt.display()))?;
         ensure!(
             want == got,
-            "{s}CRC {got:#010x} differs from {} ({want:#010x})",
+            "{s}{shown}: {what} CRC {got:#010x} differs from {} ({want:#010x})",
             txt.display()
         );
     }

@@ -309,3 +309,51 @@ impl Frame {
         Ok(())
     }
 }
+
+/// A number as messages show it: plainly, or in exponent notation when very large or
+/// small (`1e39`, not 40 digits).
+///
+/// ```
+/// use sndt_host::dataset::frame::show_number;
+/// assert_eq!(show_number(1e39f64), "1e39");
+/// assert_eq!(show_number(1e7f32), "1e7");
+/// assert_eq!(show_number(-0.25f64), "-0.25");
+/// assert_eq!(show_number(0f64), "0");
+/// ```
+pub fn show_number<T>(v: T) -> String
+where
+    T: Copy + Into<f64> + fmt::Display + fmt::LowerExp,
+{
+    let x: f64 = v.into();
+    if x != 0.0 && x.is_finite() && (x.abs() >= 1e6 || x.abs() < 1e-3) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// Why a camera at `pose` cannot be mapped with `cell_size` cells, or `None` when it can:
+/// a position component outside the key range (the core's `Error::PoseOutOfRange`), with
+/// the value and the range.
+///
+/// ```
+/// use sndt_host::dataset::frame::key_range_error;
+/// let far = sndt_core::Isometry3::translation(1e7, 0.0, 0.0);
+/// assert_eq!(
+///     key_range_error(&far, 0.1).unwrap(),
+///     "position x = 1e7 m is outside the map's key range (±32767 cells of 0.1 m, about ±3276.7 m)"
+/// );
+/// assert!(key_range_error(&sndt_core::Isometry3::identity(), 0.1).is_none());
+/// ```
+pub fn key_range_error(pose: &Isometry3<f32>, cell_size: f32) -> Option<String> {
+    let t = pose.translation.vector;
+    let (axis, v) = [("x", t.x), ("y", t.y), ("z", t.z)]
+        .into_iter()
+        .find(|&(_, v)| sndt_core::VoxelKey::from_point(&[v, 0.0, 0.0], cell_size).is_none())?;
+    let limit = sndt_core::KEY_LIMIT;
+    let metres = limit as f64 * format!("{cell_size}").parse::<f64>().unwrap_or(0.0);
+    Some(format!(
+        "position {axis} = {} m is outside the map's key range (±{limit} cells of {cell_size} m, about ±{metres:.1} m)",
+        show_number(v)
+    ))
+}

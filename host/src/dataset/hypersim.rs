@@ -22,7 +22,7 @@
 
 use crate::dataset::frame::{Frame, FrameId, Rays};
 use crate::dataset::source::Dataset;
-use crate::dataset::source::OpenOptions;
+use crate::dataset::source::{BadFrame, OpenOptions};
 use anyhow::{anyhow, bail, ensure, Context, Result};
 use sndt_core::{DepthKind, Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
 use std::collections::{BTreeMap, HashMap};
@@ -211,6 +211,8 @@ impl Dataset for Hypersim {
         &self.frames
     }
 
+    /// Errors in the frame's own files (depth, labels, predictions) and a frame without
+    /// a keyframe pose are [`BadFrame`]s; the scene's and camera's are not.
     fn load(&self, id: &FrameId) -> Result<Frame> {
         let scene = self
             .scenes
@@ -220,10 +222,43 @@ impl Dataset for Hypersim {
             .trajectories
             .get(&(id.scene.clone(), id.cam.clone()))
             .ok_or_else(|| anyhow!("{id}: trajectory not in {}", self.root.display()))?;
-        let pose = *poses
-            .poses
-            .get(id.index as usize)
-            .ok_or_else(|| anyhow!("{id}: no keyframe pose"))?;
+        let rays = self.rays(&id.scene)?;
+        self.read_frame(id, scene, poses, rays)
+            .map_err(|e| BadFrame::wrap(id, e))
+    }
+
+    fn missing_predictions(&self) -> Option<String> {
+        match self.predictions {
+            Some(_) => None,
+            None => Some("raw Hypersim has predictions only from --predictions DIR".into()),
+        }
+    }
+
+    fn pose_file(&self, id: &FrameId) -> Option<PathBuf> {
+        Some(
+            orientations_path(&self.root, &id.scene, &id.cam)
+                .with_file_name("camera_keyframe_positions.hdf5"),
+        )
+    }
+}
+
+impl Hypersim {
+    /// The files of frame `id` (depth, labels, predictions) with its keyframe pose; errors
+    /// name the file.
+    fn read_frame(
+        &self,
+        id: &FrameId,
+        scene: &Scene,
+        poses: &KeyframePoses,
+        rays: Arc<Rays>,
+    ) -> Result<Frame> {
+        let pose = *poses.poses.get(id.index as usize).ok_or_else(|| {
+            anyhow!(
+                "{}: no keyframe {} for frame {id}",
+                self.pose_file(id).unwrap_or_default().display(),
+                id.index
+            )
+        })?;
         let shape = [scene.params.height as usize, scene.params.width as usize];
         let depth = read_depth(&self.depth_path(id), shape)?;
         let sem = self.semantic_path(id);
@@ -235,7 +270,7 @@ impl Dataset for Hypersim {
         let frame = Frame {
             id: id.clone(),
             pose,
-            rays: self.rays(&id.scene)?,
+            rays,
             depth,
             depth_kind: DepthKind::Range,
             labels,

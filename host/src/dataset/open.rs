@@ -29,14 +29,17 @@ pub fn open_spec(spec: &str, options: &OpenOptions) -> Result<Box<dyn Dataset>> 
 }
 
 /// Opens a dataset directory, detecting its layout, or a ROS 2 bag (`*.mcap`):
-/// - a prepared layout has `<root>/<split>.txt` or `<root>/<split>/depth/`;
+/// - a prepared layout has `<root>/<split>.txt` or `<root>/<split>/depth/` (a `warning:`
+///   on stderr names each camera's missing intrinsics file, when it has an
+///   `intrinsics/` directory);
 /// - raw Hypersim has `<root>/<scene>/_detail/`.
 pub fn open(root: &Path, options: &OpenOptions) -> Result<Box<dyn Dataset>> {
     if root.extension().is_some_and(|e| e == "mcap") {
         let bag = crate::ros::bag::Bag::open(root, &options.bag)?;
         for (stamp, why) in &bag.skipped {
             eprintln!(
-                "skipped depth image at {:.9} s: {why}",
+                "warning: {}: skipped depth image at {:.9} s: {why}",
+                root.display(),
                 *stamp as f64 * 1e-9
             );
         }
@@ -50,7 +53,19 @@ pub fn open(root: &Path, options: &OpenOptions) -> Result<Box<dyn Dataset>> {
     }
     let split = options.split.as_deref().unwrap_or("test");
     if root.join(format!("{split}.txt")).is_file() || root.join(split).join("depth").is_dir() {
-        return Ok(Box::new(super::prepared::Prepared::open(root, options)?));
+        let prepared = super::prepared::Prepared::open(root, options)?;
+        let nominal = super::prepared::nominal_camera(options.paper_fy);
+        for missing in prepared.fallback_cameras() {
+            eprintln!(
+                "warning: {}: no such file; this camera uses the nominal Hypersim camera (fx {} fy {}, {}x{})",
+                missing.display(),
+                nominal.fx,
+                nominal.fy,
+                nominal.width,
+                nominal.height
+            );
+        }
+        return Ok(Box::new(prepared));
     }
     let raw = std::fs::read_dir(root)
         .with_context(|| format!("listing {}", root.display()))?

@@ -16,12 +16,12 @@
 //! undoes that. Without an intrinsics file (the authors' data) the camera is the nominal
 //! Hypersim pinhole, or with [`OpenOptions::paper_fy`] the authors' wrong fy.
 
-use crate::dataset::frame::{Frame, FrameId, Rays};
+use crate::dataset::frame::{show_number, Frame, FrameId, Rays};
 use crate::output::atomic::write_atomic;
 
 use crate::dataset::npy;
 use crate::dataset::source::Dataset;
-use crate::dataset::source::OpenOptions;
+use crate::dataset::source::{BadFrame, OpenOptions};
 use anyhow::{bail, Context, Result};
 use sndt_core::{DepthKind, Isometry3, Pinhole, Translation3, UnitQuaternion};
 use std::collections::HashMap;
@@ -94,16 +94,17 @@ impl Extrinsics {
     /// ```
     pub fn to_pose(&self) -> Result<Isometry3<f32>> {
         let v = [
-            self.x,
-            self.y,
-            self.z,
-            self.quat_x,
-            self.quat_y,
-            self.quat_z,
-            self.quat_w,
+            ("position x", self.x),
+            ("position y", self.y),
+            ("position z", self.z),
+            ("quat_x", self.quat_x),
+            ("quat_y", self.quat_y),
+            ("quat_z", self.quat_z),
+            ("quat_w", self.quat_w),
         ];
-        if v.iter().any(|x| !x.is_finite()) {
-            bail!("extrinsics are not finite: {self:?}");
+        // The pose is f32: a value finite in the file's f64 may not be (1e39).
+        if let Some((name, x)) = v.iter().find(|(_, x)| !(*x as f32).is_finite()) {
+            bail!("{name} = {} is not finite as f32", show_number(*x));
         }
         let (x, y, z, w) = (self.quat_x, self.quat_y, self.quat_z, self.quat_w);
         let norm = (x * x + y * y + z * z + w * w).sqrt();
@@ -155,15 +156,36 @@ pub struct Intrinsics {
 }
 
 impl Intrinsics {
-    /// The pinhole, checking focal lengths are finite and positive and the size non-zero.
+    /// The pinhole, checking focal lengths are positive and, like the principal point,
+    /// finite as f32, and the size non-zero; the error names the field and its value.
+    ///
+    /// ```
+    /// use sndt_host::dataset::prepared::Intrinsics;
+    /// let mut i = Intrinsics { fx: 500.0, fy: 500.0, cx: 320.0, cy: 240.0, width: 640, height: 480 };
+    /// assert!(i.to_pinhole().is_ok());
+    /// i.fx = 0.0;
+    /// assert_eq!(i.to_pinhole().unwrap_err().to_string(), "fx = 0, must be > 0");
+    /// ```
     pub fn to_pinhole(&self) -> Result<Pinhole> {
-        let ok = [self.fx, self.fy].iter().all(|f| f.is_finite() && *f > 0.0)
-            && self.cx.is_finite()
-            && self.cy.is_finite()
-            && self.width > 0
-            && self.height > 0;
-        if !ok {
-            bail!("invalid intrinsics {self:?}");
+        for (name, f) in [("fx", self.fx), ("fy", self.fy)] {
+            if f.is_nan() || f <= 0.0 {
+                bail!("{name} = {}, must be > 0", show_number(f));
+            }
+        }
+        for (name, x) in [
+            ("fx", self.fx),
+            ("fy", self.fy),
+            ("cx", self.cx),
+            ("cy", self.cy),
+        ] {
+            if !(x as f32).is_finite() {
+                bail!("{name} = {} is not finite as f32", show_number(x));
+            }
+        }
+        for (name, n) in [("width", self.width), ("height", self.height)] {
+            if n == 0 {
+                bail!("{name} = 0, must be > 0");
+            }
         }
         Ok(Pinhole {
             fx: self.fx as f32,
@@ -198,12 +220,18 @@ pub struct Prepared {
     predictions: Option<PathBuf>,
     paper_fy: bool,
     rays: Mutex<HashMap<(String, String), Arc<Rays>>>,
+    /// With an `intrinsics/` directory: the intrinsics files missing for cameras with frames.
+    fallback: Vec<PathBuf>,
 }
 
 impl Prepared {
     /// Opens split `options.split` (default `test`) of the layout at `root`. The frame
     /// list comes from `<root>/<split>.txt` when present, else from listing
-    /// `<split>/depth/`. Files of individual frames are only read by [`Dataset::load`].
+    /// `<split>/depth/`; a split without frames is an error. The intrinsics of every
+    /// camera are read and checked here (an error names the file); with an
+    /// `intrinsics/` directory, a camera without its file uses the nominal camera
+    /// ([`Prepared::fallback_cameras`]). Files of individual frames are only read by
+    /// [`Dataset::load`].
     pub fn open(root: &Path, options: &OpenOptions) -> Result<Prepared> {
         let split = options.split.clone().unwrap_or_else(|| "test".to_string());
         let dir = root.join(&split);
@@ -222,12 +250,21 @@ impl Prepared {
         };
         frames.sort();
         frames.dedup();
+        if frames.is_empty() {
+            if list.is_file() {
+                bail!("{}: lists no frames (0 frames to map)", list.display());
+            }
+            bail!(
+                "{}: no <scene>/<cam>/<NNNN>.png depth images (0 frames to map)",
+                depth.display()
+            );
+        }
         let predictions = match &options.predictions {
             Some(p) if !p.is_dir() => bail!("{}: predictions directory not found", p.display()),
             Some(p) => Some(p.clone()),
             None => Some(dir.join("esanet")).filter(|p| p.is_dir()),
         };
-        Ok(Prepared {
+        let mut prepared = Prepared {
             root: root.to_path_buf(),
             labels: dir.join("semantic_40").is_dir(),
             split,
@@ -236,7 +273,41 @@ impl Prepared {
             predictions,
             paper_fy: options.paper_fy,
             rays: Mutex::new(HashMap::new()),
-        })
+            fallback: Vec::new(),
+        };
+        prepared.fallback = prepared.read_cameras()?;
+        Ok(prepared)
+    }
+
+    /// The intrinsics files missing from the layout's `intrinsics/` directory for cameras
+    /// with frames: those cameras use the nominal Hypersim camera. Empty without an
+    /// `intrinsics/` directory (the authors' layout, where every camera is nominal) and
+    /// when every camera has its file.
+    ///
+    /// A layout may mix both legitimately: [`write_frame`] into the authors' layout adds
+    /// intrinsics for the cameras it writes only.
+    pub fn fallback_cameras(&self) -> &[PathBuf] {
+        &self.fallback
+    }
+
+    /// Reads every camera's intrinsics into the rays cache (an error names the file);
+    /// returns the missing files when the layout has an `intrinsics/` directory.
+    fn read_cameras(&self) -> Result<Vec<PathBuf>> {
+        let per_camera = self.dir.join("intrinsics").is_dir();
+        let mut missing = Vec::new();
+        let mut seen = None;
+        for id in &self.frames {
+            if seen == Some((&id.scene, &id.cam)) {
+                continue;
+            }
+            seen = Some((&id.scene, &id.cam));
+            let path = intrinsics_path(&self.dir, id);
+            if per_camera && !path.is_file() {
+                missing.push(path);
+            }
+            self.rays(id)?;
+        }
+        Ok(missing)
     }
 
     fn file(&self, kind: &str, id: &FrameId, ext: &str) -> PathBuf {
@@ -253,7 +324,7 @@ impl Prepared {
         let cam = if path.is_file() {
             let intr: Intrinsics = read_json(&path)?;
             intr.to_pinhole()
-                .with_context(|| format!("{}", path.display()))?
+                .map_err(|e| anyhow::anyhow!("{}: {e:#}", path.display()))?
         } else {
             nominal_camera(self.paper_fy)
         };
@@ -279,7 +350,16 @@ impl Dataset for Prepared {
                 .as_ref()
                 .map_or("none".to_string(), |p| p.display().to_string()),
             if self.dir.join("intrinsics").is_dir() {
-                "intrinsics per camera".to_string()
+                let c = nominal_camera(self.paper_fy);
+                match self.fallback.len() {
+                    0 => "intrinsics per camera".to_string(),
+                    n => format!(
+                        "intrinsics per camera, but {n} of {} cameras have no intrinsics file and use the nominal Hypersim camera fx {} fy {}",
+                        self.trajectories().len(),
+                        c.fx,
+                        c.fy
+                    ),
+                }
             } else {
                 let c = nominal_camera(self.paper_fy);
                 format!(
@@ -296,8 +376,31 @@ impl Dataset for Prepared {
         &self.frames
     }
 
+    /// Errors in the frame's own files are [`BadFrame`]s; the camera's are not.
     fn load(&self, id: &FrameId) -> Result<Frame> {
         let rays = self.rays(id)?;
+        self.read_frame(id, rays).map_err(|e| BadFrame::wrap(id, e))
+    }
+
+    fn missing_predictions(&self) -> Option<String> {
+        match self.predictions {
+            Some(_) => None,
+            None => Some(format!(
+                "no {} directory (or give one with --predictions DIR)",
+                self.dir.join("esanet").display()
+            )),
+        }
+    }
+
+    fn pose_file(&self, id: &FrameId) -> Option<PathBuf> {
+        Some(self.file("extrinsics", id, "json"))
+    }
+}
+
+impl Prepared {
+    /// The files of frame `id` seen by a camera with `rays`: depth, labels, extrinsics,
+    /// predictions; errors name the file.
+    fn read_frame(&self, id: &FrameId, rays: Arc<Rays>) -> Result<Frame> {
         let (w, h) = (rays.width(), rays.height());
         let camera_source = || {
             let p = intrinsics_path(&self.dir, id);

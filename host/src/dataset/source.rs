@@ -1,7 +1,10 @@
-//! The interface every dataset reader implements, and the options readers take.
+//! The interface every dataset reader implements, the options readers take, and
+//! [`usable_frames`]: a trajectory's frames read for a run that skips the bad ones.
 
-use super::frame::{Frame, FrameId};
+use super::frame::{key_range_error, Frame, FrameId};
 use anyhow::Result;
+use std::fmt;
+use std::path::PathBuf;
 
 /// A source of frames.
 pub trait Dataset: Send + Sync {
@@ -11,8 +14,21 @@ pub trait Dataset: Send + Sync {
     /// All frames, ordered by trajectory then index.
     fn frames(&self) -> &[FrameId];
 
-    /// Reads one frame.
+    /// Reads one frame. An error in the frame's own files (unreadable, corrupt, values out
+    /// of range) is a [`BadFrame`], which a run may skip ([`usable_frames`]); any other
+    /// error (the dataset's or a camera's files) is not.
     fn load(&self, id: &FrameId) -> Result<Frame>;
+
+    /// `None` when the frames carry predicted labels; else where they were looked for
+    /// (for the message of a run that needs them).
+    fn missing_predictions(&self) -> Option<String> {
+        Some("this kind of dataset has no predicted labels".into())
+    }
+
+    /// The file a frame's pose was read from, for messages about the pose.
+    fn pose_file(&self, _id: &FrameId) -> Option<PathBuf> {
+        None
+    }
 
     /// When the frame was recorded, nanoseconds, if the dataset knows (ROS 2 bags).
     fn stamp(&self, _id: &FrameId) -> Option<u64> {
@@ -84,6 +100,103 @@ impl Dataset for Every {
     fn load(&self, id: &FrameId) -> Result<Frame> {
         self.inner.load(id)
     }
+
+    fn missing_predictions(&self) -> Option<String> {
+        self.inner.missing_predictions()
+    }
+
+    fn pose_file(&self, id: &FrameId) -> Option<PathBuf> {
+        self.inner.pose_file(id)
+    }
+}
+
+/// A frame whose own input is bad: one of its files is missing, unreadable or corrupt, or
+/// holds a value out of range. A run can skip the frame and use the others. Readers return
+/// it from [`Dataset::load`] inside an `anyhow::Error`; `why` names the file and says what
+/// is wrong.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BadFrame {
+    /// The frame.
+    pub id: FrameId,
+    /// What is wrong, naming the file.
+    pub why: String,
+}
+
+impl BadFrame {
+    /// `error` of frame `id` (a reader's message naming the file) as a bad frame.
+    ///
+    /// ```
+    /// use sndt_host::dataset::{source::BadFrame, FrameId};
+    /// let id = FrameId::parse("room/cam_00/0002").unwrap();
+    /// let e = BadFrame::wrap(&id, anyhow::anyhow!("0002.png: not a readable PNG"));
+    /// assert_eq!(BadFrame::of(&e).unwrap().why, "0002.png: not a readable PNG");
+    /// assert!(BadFrame::of(&anyhow::anyhow!("other")).is_none());
+    /// ```
+    pub fn wrap(id: &FrameId, error: anyhow::Error) -> anyhow::Error {
+        anyhow::Error::new(BadFrame {
+            id: id.clone(),
+            why: format!("{error:#}"),
+        })
+    }
+
+    /// The bad frame `error` is (or was caused by), if any.
+    pub fn of(error: &anyhow::Error) -> Option<&BadFrame> {
+        error.chain().find_map(|e| e.downcast_ref::<BadFrame>())
+    }
+}
+
+impl fmt::Display for BadFrame {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.why)
+    }
+}
+
+impl std::error::Error for BadFrame {}
+
+/// The frames `ids` of `dataset`, read in order for a run that can do without some of
+/// them (`sndt map`): a [`BadFrame`], and a frame whose camera position lies outside the
+/// key range of a map of `cell_size` cells (the map would refuse it), is skipped with a
+/// `warning:` line on stderr naming the file, and added to `skipped`. Any other error is
+/// passed on and stops the run.
+///
+/// ```
+/// use sndt_host::dataset::{open_spec, source::usable_frames, Dataset};
+/// let d = open_spec("synthetic:1:3", &Default::default()).unwrap();
+/// let mut skipped = Vec::new();
+/// let n = usable_frames(d.as_ref(), d.frames(), 0.1, &mut skipped).count();
+/// assert_eq!((n, skipped.len()), (3, 0));
+/// ```
+pub fn usable_frames<'a>(
+    dataset: &'a dyn Dataset,
+    ids: &'a [FrameId],
+    cell_size: f32,
+    skipped: &'a mut Vec<BadFrame>,
+) -> impl Iterator<Item = Result<Frame>> + 'a {
+    ids.iter().filter_map(move |id| {
+        let frame =
+            dataset
+                .load(id)
+                .and_then(|frame| match key_range_error(&frame.pose, cell_size) {
+                    None => Ok(frame),
+                    Some(why) => {
+                        let file = dataset
+                            .pose_file(id)
+                            .map_or(format!("frame {id}"), |p| p.display().to_string());
+                        Err(BadFrame::wrap(id, anyhow::anyhow!("{file}: {why}")))
+                    }
+                });
+        match frame {
+            Ok(frame) => Some(Ok(frame)),
+            Err(e) => match BadFrame::of(&e) {
+                Some(bad) => {
+                    eprintln!("warning: skipping frame {id}: {}", bad.why);
+                    skipped.push(bad.clone());
+                    None
+                }
+                None => Some(Err(e)),
+            },
+        }
+    })
 }
 
 /// Options for [`open`](crate::dataset::open::open).

@@ -127,13 +127,13 @@ fn simulate_with<const V: usize, const B: usize>(
     stride: u32,
 ) -> Result<TrajectoryBudget> {
     let mut map: Box<Map<V, B, 40>> =
-        crate::semantic_map::boxed_map(config).map_err(|e| anyhow::anyhow!("config: {e:?}"))?;
+        crate::semantic_map::boxed_map(config).map_err(|e| anyhow::anyhow!("config: {e}"))?;
     let mut out = TrajectoryBudget::default();
     for frame in frames {
         let frame = frame?;
         let points = frame.camera_points(LabelSource::Gt, stride);
         map.integrate(&frame.pose, &points)
-            .map_err(|e| anyhow::anyhow!("{}: integrate: {e:?}", frame.id))?;
+            .map_err(|e| anyhow::anyhow!("{}: integrate: {e}", frame.id))?;
         out.frames += 1;
         out.peak_voxels = out.peak_voxels.max(map.len());
         out.peak_blocks = out.peak_blocks.max(map.block_count());

@@ -173,7 +173,7 @@ impl VectorFrame {
             self.translation[1],
             self.translation[2],
         );
-        pose_from_matrix(&m, &t).map_err(|e| anyhow::anyhow!("invalid pose: {e:?}"))
+        pose_from_matrix(&m, &t).map_err(|e| anyhow::anyhow!("invalid pose: {e}"))
     }
 }
 
@@ -424,9 +424,12 @@ impl Header {
             "test vector: bad camera {camera:?}"
         );
         let config = Config::with_cell_size(le.f32_at(48));
-        config
-            .validate()
-            .map_err(|_| anyhow::anyhow!("test vector: bad cell size {}", config.cell_size))?;
+        config.validate().map_err(|e| {
+            anyhow::anyhow!(
+                "test vector: bad cell size {} (byte 48): {e}",
+                config.cell_size
+            )
+        })?;
         Ok(Header {
             frames,
             probes,
@@ -517,7 +520,7 @@ pub struct VectorRun {
 /// returns the map's snapshot CRC with the counts.
 pub fn run(v: &TestVector) -> Result<VectorRun> {
     let mut map: Box<VectorMap> =
-        crate::semantic_map::boxed_map(v.config).map_err(|e| anyhow::anyhow!("config: {e:?}"))?;
+        crate::semantic_map::boxed_map(v.config).map_err(|e| anyhow::anyhow!("config: {e}"))?;
     let mut reports = Vec::with_capacity(v.frames.len());
     for (k, f) in v.frames.iter().enumerate() {
         let image = DepthImage {
@@ -529,7 +532,7 @@ pub fn run(v: &TestVector) -> Result<VectorRun> {
         };
         let r = map
             .integrate_depth(&f.pose()?, &image)
-            .map_err(|e| anyhow::anyhow!("frame {k}: integrate_depth: {e:?}"))?;
+            .map_err(|e| anyhow::anyhow!("frame {k}: integrate_depth: {e}"))?;
         reports.push(r);
     }
     let probes = v
@@ -709,7 +712,9 @@ mod tests {
             error(&|b| b[32..36].copy_from_slice(&(-1.0f32).to_le_bytes())).contains("bad camera")
         );
         assert!(
-            error(&|b| b[48..52].copy_from_slice(&0.0f32.to_le_bytes())).contains("bad cell size")
+            error(&|b| b[48..52].copy_from_slice(&0.0f32.to_le_bytes())).contains(
+                "bad cell size 0 (byte 48): invalid config: cell_size must be a number of metres"
+            )
         );
         // The first probe's frame index, then the last frame's last label.
         assert!(error(&|b| b[HEADER_BYTES] = 9).contains("probe (9, "));

@@ -14,13 +14,13 @@
 //! into row bands rendered in parallel.
 
 use crate::dataset::frame::{Frame, FrameId, LabelSource};
-use crate::dataset::source::Dataset;
+use crate::dataset::source::{usable_frames, Dataset};
 use crate::eval::metrics::{Confusion, Metrics};
 use crate::ros::export::MapBag;
 use crate::ros::msgs::Time;
 use crate::ros::write::frame_time;
 use crate::semantic_map::{boxed_map, HostMap, SemanticMap};
-use anyhow::{anyhow, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use rayon::prelude::*;
 use sndt_core::{Config, DepthKind, Map};
 use std::borrow::Cow;
@@ -79,6 +79,8 @@ pub struct TrajectoryResult {
     pub name: String,
     /// Frames mapped.
     pub frames: usize,
+    /// Frames skipped for bad input (named in a `warning:` on stderr).
+    pub skipped: usize,
     /// Update time per frame, milliseconds.
     pub update_ms: Vec<f64>,
     /// NDT voxels in the final map.
@@ -115,6 +117,16 @@ impl Evaluation {
     /// mIoU / mPAcc / invR and per-class IoU.
     pub fn metrics(&self) -> Metrics {
         self.confusion.metrics()
+    }
+
+    /// Frames mapped, over all trajectories.
+    pub fn frames(&self) -> usize {
+        self.trajectories.iter().map(|t| t.frames).sum()
+    }
+
+    /// Frames skipped for bad input, over all trajectories.
+    pub fn skipped(&self) -> usize {
+        self.trajectories.iter().map(|t| t.skipped).sum()
     }
 
     /// Mean update time per frame over all frames, milliseconds.
@@ -243,7 +255,7 @@ pub fn evaluate(
     options
         .config
         .validate()
-        .map_err(|e| anyhow!("config: {e:?}"))?;
+        .map_err(|e| anyhow!("config: {e}"))?;
     let trajectories = dataset.trajectories();
     let single = trajectories.len() == 1;
     let parts: Vec<Result<TrajectoryEvaluation>> = trajectories
@@ -267,6 +279,7 @@ pub fn evaluate(
         kept: Vec::new(),
         maps: Vec::new(),
     };
+    let mut last_skipped = None;
     for part in parts {
         let part = part?;
         eval.confusion.merge(&part.confusion);
@@ -274,6 +287,16 @@ pub fn evaluate(
         eval.trajectories.push(part.result);
         eval.kept.extend(part.kept);
         eval.maps.extend(part.map);
+        last_skipped = part.skipped.or(last_skipped);
+    }
+    if eval.frames() == 0 {
+        match last_skipped {
+            Some(why) => bail!(
+                "nothing mapped: all {} frames were skipped (the last: {why})",
+                eval.skipped()
+            ),
+            None => bail!("nothing mapped: {} has no frames", dataset.describe()),
+        }
     }
     Ok(eval)
 }
@@ -285,11 +308,14 @@ struct TrajectoryEvaluation {
     result: TrajectoryResult,
     kept: Vec<(FrameId, Vec<u8>)>,
     map: Option<Box<HostMap>>,
+    /// Why the last skipped frame was skipped, if any was.
+    skipped: Option<String>,
 }
 
 /// One trajectory through [`map_and_score`] with an S-NDT map: frames loaded one at a
-/// time, the input labels scored as they are mapped, back-projections written and kept as
-/// `options` asks, the final map saved and kept as asked.
+/// time ([`usable_frames`]: bad ones skipped with a warning), the input labels scored as
+/// they are mapped, back-projections written and kept as `options` asks, the final map
+/// saved and kept as asked.
 fn evaluate_trajectory(
     dataset: &dyn Dataset,
     (name, ids): (&str, &[FrameId]),
@@ -297,19 +323,23 @@ fn evaluate_trajectory(
     mut bag: Option<MapBag>,
     progress: &(dyn Fn() + Sync),
 ) -> Result<TrajectoryEvaluation> {
-    let mut map: Box<HostMap> = boxed_map(options.config).map_err(|e| anyhow!("config: {e:?}"))?;
+    let mut map: Box<HostMap> = boxed_map(options.config).map_err(|e| anyhow!("config: {e}"))?;
     let mut input = Confusion::default();
     let mut kept = Vec::new();
+    let mut skipped = Vec::new();
+    // The map after the last frame mapped, when the bag does not have it yet.
+    let mut unwritten = None;
+    let frames = usable_frames(dataset, ids, options.config.cell_size, &mut skipped);
     let score = map_and_score(
         map.as_mut(),
-        ids.iter().map(|id| dataset.load(id).map(Cow::Owned)),
+        frames.map(|frame| frame.map(Cow::Owned)),
         options.labels,
         options.stride,
         &[()],
         |frame, map| {
             score_input(&mut input, frame, options.labels);
             if let Some(b) = bag.as_mut() {
-                write_growing(b, dataset, ids, frame, map, options.mcap_every)?;
+                unwritten = write_growing(b, dataset, ids, frame, map, options.mcap_every)?;
             }
             progress();
             Ok(())
@@ -325,7 +355,10 @@ fn evaluate_trajectory(
             Ok(())
         },
     )?;
-    if let Some(b) = bag {
+    if let Some(mut b) = bag {
+        if let Some(stamp) = unwritten {
+            b.write(map.as_ref(), stamp)?;
+        }
         b.finish()?;
     }
     if let Some(dir) = &options.save_maps {
@@ -340,7 +373,8 @@ fn evaluate_trajectory(
         input,
         result: TrajectoryResult {
             name: name.to_string(),
-            frames: ids.len(),
+            frames: score.update_ms.len(),
+            skipped: skipped.len(),
             update_ms: score.update_ms,
             voxels: map.len(),
             blocks: map.block_count(),
@@ -348,6 +382,7 @@ fn evaluate_trajectory(
         },
         kept,
         map: options.keep_maps.then_some(map),
+        skipped: skipped.pop().map(|bad| bad.why),
     })
 }
 
@@ -383,18 +418,69 @@ pub fn save_snapshot<const V: usize, const B: usize, const C: usize>(
     let mut buf = vec![0u8; map.snapshot_len()];
     let n = map
         .write_snapshot(&mut buf)
-        .map_err(|e| anyhow!("{}: snapshot: {e:?}", path.display()))?;
+        .map_err(|e| anyhow!("{}: snapshot: {e}", path.display()))?;
     // Atomically: a crash or kill while saving leaves the previous map file intact.
     crate::output::atomic::write_bytes(path, &buf[..n])
 }
 
-/// Reads a map snapshot file into a heap map of the evaluation's capacity.
+/// Reads a map snapshot file into a heap map of the evaluation's capacity. The error says
+/// what is wrong; for a stored config out of its range, which field.
 pub fn load_snapshot(path: &std::path::Path) -> Result<Box<HostMap>> {
     let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
-    let mut map: Box<HostMap> = boxed_map(Config::DEFAULT).map_err(|e| anyhow!("{e:?}"))?;
-    map.read_snapshot(&bytes)
-        .map_err(|e| anyhow!("{}: not a readable sndt snapshot: {e:?}", path.display()))?;
+    let mut map: Box<HostMap> = boxed_map(Config::DEFAULT).map_err(|e| anyhow!("{e}"))?;
+    map.read_snapshot(&bytes).map_err(|e| {
+        let why = match (e, stored_config(&bytes).map(|c| c.validate())) {
+            (sndt_core::Error::SnapshotCorrupt, Some(Err(bad))) => {
+                format!("its stored config is refused: {bad}")
+            }
+            _ => e.to_string(),
+        };
+        anyhow!("{}: not a readable sndt snapshot: {why}", path.display())
+    })?;
     Ok(map)
+}
+
+/// The config in a snapshot's header (`docs/ARCHITECTURE.md`, snapshot format: eleven
+/// `f32` from offset 16, `n_min` and `n_max` at 60 and 64, then the `u8` fields), unchecked;
+/// `None` when the header is too short or its miss model byte unknown.
+///
+/// ```
+/// use sndt_host::eval::evaluate::stored_config;
+/// let mut config = sndt_core::Config::with_cell_size(0.05);
+/// config.max_range = 7.5;
+/// let map = sndt_host::semantic_map::boxed_map::<64, 16, 40>(config).unwrap();
+/// let mut buf = vec![0; map.snapshot_len()];
+/// map.write_snapshot(&mut buf).unwrap();
+/// assert_eq!(stored_config(&buf), Some(config));
+/// ```
+pub fn stored_config(bytes: &[u8]) -> Option<Config> {
+    let header = bytes.get(..76)?;
+    let f = |k: usize| f32::from_le_bytes(header[16 + 4 * k..20 + 4 * k].try_into().unwrap());
+    let u = |o: usize| u32::from_le_bytes(header[o..o + 4].try_into().unwrap());
+    Some(Config {
+        cell_size: f(0),
+        eigen_ratio: f(1),
+        hit: f(2),
+        miss: f(3),
+        clamp_min: f(4),
+        clamp_max: f(5),
+        lambda: f(6),
+        noise_base: f(7),
+        noise_quadratic: f(8),
+        max_range: f(9),
+        render_radius: f(10),
+        n_min: u(60),
+        n_max: u(64),
+        quant_bits: header[68],
+        top_k: header[69],
+        min_score: header[70],
+        miss_model: match header[71] {
+            0 => sndt_core::MissModel::NdtOm,
+            1 => sndt_core::MissModel::Constant,
+            _ => return None,
+        },
+        votes_per_frame: header[72],
+    })
 }
 
 /// The evaluation's ground-truth depth: planar depth, with no-measurement pixels as 0
@@ -423,8 +509,10 @@ pub const PAPER_SNDT: [(f32, [f64; 3], [f64; 3], f64); 4] = [
 /// The paper's ESANet-R34-NBt1D alone (no mapping) on the Hypersim test set: mIoU (%).
 pub const PAPER_ESANET_MIOU: f64 = 41.17;
 
-/// Writes `map` into `bag` after `frame` when it is every `every`-th frame of `ids` or the
-/// last, stamped with the frame's recording time (10 Hz from 1 s when unknown).
+/// Writes `map` into `bag` after `frame` when it is every `every`-th frame of `ids`,
+/// stamped with the frame's recording time (10 Hz from 1 s when unknown). Returns that
+/// stamp when the map was not written: the caller writes the map after the last frame
+/// mapped at its stamp (frames may be skipped, so the last of `ids` may never come).
 fn write_growing(
     bag: &mut MapBag,
     dataset: &dyn Dataset,
@@ -432,16 +520,16 @@ fn write_growing(
     frame: &Frame,
     map: &HostMap,
     every: Option<usize>,
-) -> Result<()> {
+) -> Result<Option<Time>> {
     let k = ids.iter().position(|id| *id == frame.id).unwrap_or(0);
-    let due = every.is_some_and(|n| n > 0 && (k + 1) % n == 0);
-    if due || k + 1 == ids.len() {
-        let stamp = dataset
-            .stamp(&frame.id)
-            .map_or(frame_time(k), Time::from_nanos);
+    let stamp = dataset
+        .stamp(&frame.id)
+        .map_or(frame_time(k), Time::from_nanos);
+    if every.is_some_and(|n| n > 0 && (k + 1) % n == 0) {
         bag.write(map, stamp)?;
+        return Ok(None);
     }
-    Ok(())
+    Ok(Some(stamp))
 }
 
 /// The bag of trajectory `name`: `path` itself when it is the only one, else

@@ -56,7 +56,8 @@ typedef enum sndt_status {
    */
   SNDT_ERR_BAD_ARG = 2,
   /**
-   * A configuration field is out of its documented range.
+   * A configuration field is out of its documented range (which one is not reported
+   * here: the ranges are those of `sndt_config`).
    */
   SNDT_ERR_CONFIG = 3,
   /**
@@ -145,7 +146,8 @@ typedef struct sndt_config {
    */
   float noise_quadratic;
   /**
-   * Points farther than this (metres) only clear free space up to it. Default 20.
+   * Points farther than this (metres) only clear free space up to it. Default 20,
+   * [0.001, 1e4], and at most 4096 cells: max_range <= 4096 * cell_size.
    */
   float max_range;
   /**

@@ -19,7 +19,8 @@ pub enum sndt_status {
     /// rotation is not one, a bad camera, image sizes that disagree, a misaligned pointer,
     /// an output buffer that overlaps another buffer of the call or the map.
     SNDT_ERR_BAD_ARG = 2,
-    /// A configuration field is out of its documented range.
+    /// A configuration field is out of its documented range (which one is not reported
+    /// here: the ranges are those of `sndt_config`).
     SNDT_ERR_CONFIG = 3,
     /// The storage is smaller than `SNDT_MAP_BYTES`, or a frame has more points than the
     /// core takes in one frame, or a snapshot holds more than this map's capacity.
@@ -41,7 +42,7 @@ use sndt_status::*;
 impl From<Error> for sndt_status {
     fn from(e: Error) -> Self {
         match e {
-            Error::InvalidConfig => SNDT_ERR_CONFIG,
+            Error::InvalidConfig(_) => SNDT_ERR_CONFIG,
             Error::InvalidPose | Error::InvalidImage => SNDT_ERR_BAD_ARG,
             Error::PoseOutOfRange => SNDT_ERR_OUT_OF_RANGE,
             Error::FrameTooLarge | Error::SnapshotCapacity => SNDT_ERR_CAPACITY,
@@ -85,7 +86,8 @@ pub struct sndt_config {
     pub noise_base: f32,
     /// Default 0.0025.
     pub noise_quadratic: f32,
-    /// Points farther than this (metres) only clear free space up to it. Default 20.
+    /// Points farther than this (metres) only clear free space up to it. Default 20,
+    /// [0.001, 1e4], and at most 4096 cells: max_range <= 4096 * cell_size.
     pub max_range: f32,
     /// Labels per point that vote (1..=3). Default 1.
     pub top_k: u8,

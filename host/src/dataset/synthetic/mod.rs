@@ -395,6 +395,11 @@ impl Dataset for Synthetic {
     fn load(&self, id: &FrameId) -> Result<Frame> {
         Ok(self.render_frame(id)?.0)
     }
+
+    fn missing_predictions(&self) -> Option<String> {
+        (!self.options.predictions)
+            .then(|| "the synthetic split was rendered without predictions".into())
+    }
 }
 
 /// Generates the split and writes it in the prepared layout under `root` (split `test`,
