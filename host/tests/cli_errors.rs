@@ -388,3 +388,74 @@ fn testvector_check_needs_its_crc_files_and_names_the_file() {
     assert_eq!(code, 1, "{err}");
     assert!(err.contains(&format!("{}: ", vector.display())), "{err}");
 }
+
+/// `sndt experiment DIR --out OUT --cells 0.2 --kernels 0.4 extra...` on a prepared layout
+/// (one small configuration per method).
+fn experiment(root: &Path, extra: &[&str]) -> (i32, String, String) {
+    let out = root.with_file_name("experiment");
+    let mut args = vec![
+        "experiment",
+        root.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--cells",
+        "0.2",
+        "--kernels",
+        "0.4",
+    ];
+    args.extend_from_slice(extra);
+    sndt_out(&args)
+}
+
+#[test]
+fn an_experiment_with_predicted_labels_needs_predictions() {
+    let root = prepared("exp-nopred", 1, 1);
+    for labels in ["pred", "both"] {
+        let (code, out, err) = experiment(&root, &["--labels", labels]);
+        assert_eq!(code, 1, "{out}{err}");
+        let esanet = root.join("test").join("esanet");
+        assert!(
+            err.contains(&format!("--labels {labels}: "))
+                && err.contains(&format!(
+                    "has no predictions: no {} directory",
+                    esanet.display()
+                )),
+            "{err}"
+        );
+        assert!(!out.contains("mIoU"), "{out}");
+    }
+}
+
+#[test]
+fn an_experiment_skips_bad_frames_and_counts_them() {
+    let root = prepared("exp-corrupt", 1, 3);
+    let png = root.join("test/depth/synth_00_living/cam_00/0001.png");
+    std::fs::write(&png, b"not a PNG").unwrap();
+    let (code, out, err) = experiment(&root, &["--labels", "gt"]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        err.contains(&format!(
+            "warning: skipping frame synth_00_living/cam_00/0001: {}: not a readable PNG",
+            png.display()
+        )),
+        "{err}"
+    );
+    assert!(
+        out.contains(
+            "1 trajectories, 2 frames mapped, 1 skipped (bad input, named in the warnings)"
+        ),
+        "{out}"
+    );
+    // Every frame bad: an error naming the last reason, and no tables.
+    for k in [0, 2] {
+        std::fs::write(png.with_file_name(format!("{k:04}.png")), b"").unwrap();
+    }
+    let (code, out, err) = experiment(&root, &["--labels", "gt"]);
+    assert_eq!(code, 1, "{out}{err}");
+    assert!(
+        err.contains("nothing mapped: all 3 frames were skipped (the last: ")
+            && err.contains("0002.png: not a readable PNG"),
+        "{err}"
+    );
+    assert!(!out.contains("Table"), "{out}");
+}

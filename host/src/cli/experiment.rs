@@ -10,7 +10,7 @@ use crate::eval::experiment::{manifest, progress_steps, run_resumable, Experimen
 use crate::eval::experiment::{ExperimentOptions, Method};
 use crate::eval::run_store::{Manifest, RunStore};
 use crate::output::progress::progress;
-use anyhow::Result;
+use anyhow::{bail, Result};
 use sndt_core::Config;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -141,6 +141,16 @@ pub fn run(a: &ExperimentArgs) -> Result<()> {
         dataset = Box::new(Every::new(dataset, a.every));
     }
     println!("sndt experiment: {}", dataset.describe());
+    if a.labels != ExperimentLabels::Gt {
+        // Maps without labels would score 0 % and look like a result.
+        if let Some(place) = dataset.missing_predictions() {
+            let option = format!("{:?}", a.labels).to_lowercase();
+            bail!(
+                "--labels {option}: {} has no predictions: {place}",
+                a.dataset
+            );
+        }
+    }
     let opts = a.options();
     let store = RunStore::open(
         &a.out.join("runs"),
@@ -149,8 +159,12 @@ pub fn run(a: &ExperimentArgs) -> Result<()> {
     )?;
     let t = Instant::now();
     let exp = run_with_progress(dataset.as_ref(), &opts, &store, t)?;
+    let skipped = match exp.skipped {
+        0 => String::new(),
+        k => format!(", {k} skipped (bad input, named in the warnings)"),
+    };
     println!(
-        "{} trajectories, {} frames, {:.0} s",
+        "{} trajectories, {} frames mapped{skipped}, {:.0} s",
         dataset.trajectories().len(),
         exp.frames,
         t.elapsed().as_secs_f64()

@@ -19,7 +19,7 @@
 
 use crate::baselines::bki::{BkiConfig, BkiMap, Readout, SurfaceStates};
 use crate::dataset::frame::{Frame, FrameId, LabelSource};
-use crate::dataset::source::Dataset;
+use crate::dataset::source::{usable_frames, Dataset};
 use crate::eval::evaluate::{gt_depth, map_and_score, MapScore};
 use crate::eval::metrics::{Confusion, Metrics};
 use crate::eval::run_store::{file_name_part, Manifest, RunStore};
@@ -222,8 +222,10 @@ pub struct Experiment {
     pub runs: BTreeMap<RunKey, Run>,
     /// The labels fed to the maps, scored on the frames themselves (per label source).
     pub inputs: BTreeMap<Segmentation, Confusion>,
-    /// Frames per trajectory and trajectory count.
+    /// Frames mapped, over all trajectories.
     pub frames: usize,
+    /// Frames skipped for bad input (each named in a `warning:` on stderr when read).
+    pub skipped: usize,
 }
 
 /// How many progress steps [`run`] reports for `frames` frames: one per frame mapped and
@@ -300,8 +302,9 @@ fn run_with(
         .collect();
     let mut exp = Experiment::default();
     for p in parts {
-        let (name, (runs, inputs, n)) = p?;
+        let (name, (runs, inputs, (n, skipped))) = p?;
         exp.frames += n;
+        exp.skipped += skipped;
         for (key, confusion, seconds, surface) in runs {
             let run = exp.runs.entry(key).or_default();
             run.confusion.merge(&confusion);
@@ -363,11 +366,12 @@ fn bki_config(options: &ExperimentOptions, cell: f32, kernel: f32) -> BkiConfig 
 }
 
 /// One trajectory's results: per configuration (key, confusion, update seconds, surface
-/// read-out), the input labels' confusion per source, and the frame count.
+/// read-out), the input labels' confusion per source, and the frames mapped and skipped
+/// (bad input).
 type TrajectoryRuns = (
     Vec<(RunKey, Confusion, f64, SurfaceStates)>,
     Vec<(Segmentation, Confusion)>,
-    usize,
+    (usize, usize),
 );
 
 /// One map to build on a trajectory: a label source, a cell size and S-NDT (`None`) or a
@@ -439,14 +443,25 @@ fn run_trajectory(
         .map(|&job| plan.store.and_then(|s| load_job(s, plan, name, n, job)))
         .collect();
     let stored_inputs = plan.store.and_then(|s| load_inputs(s, plan, name, n));
+    let mut skipped = Vec::new();
     let frames = if stored_inputs.is_none() || stored.iter().any(Option::is_none) {
-        ids.iter()
-            .map(|id| dataset.load(id))
-            .collect::<Result<Vec<Frame>>>()?
+        // Bad frames are skipped with a warning naming the file; the smallest cell has
+        // the smallest key range, so a pose it accepts every map accepts.
+        let cell = plan
+            .options
+            .cells
+            .iter()
+            .copied()
+            .fold(f32::INFINITY, f32::min);
+        usable_frames(dataset, ids, cell, &mut skipped).collect::<Result<Vec<Frame>>>()?
     } else {
         Vec::new()
     };
-    let inputs = match stored_inputs {
+    if frames.is_empty() && !skipped.is_empty() {
+        let last = skipped.last().map_or("", |b| b.why.as_str());
+        bail!("nothing mapped: all {n} frames were skipped (the last: {last})");
+    }
+    let (inputs, skipped) = match stored_inputs {
         Some(inputs) => inputs,
         None => {
             let inputs = plan
@@ -454,10 +469,12 @@ fn run_trajectory(
                 .iter()
                 .map(|&s| Ok((s, input_confusion(&frames, s)?)))
                 .collect::<Result<Vec<_>>>()?;
+            let skipped = skipped.len();
             if let Some(store) = plan.store {
-                store.save(&inputs_file(name), &stored_inputs_of(name, n, &inputs))?;
+                let record = stored_inputs_of(name, (n, skipped), &inputs);
+                store.save(&inputs_file(name), &record)?;
             }
-            inputs
+            (inputs, skipped)
         }
     };
     let runs = jobs
@@ -478,7 +495,11 @@ fn run_trajectory(
             }
         })
         .collect::<Result<Vec<_>>>()?;
-    Ok((runs.into_iter().flatten().collect(), inputs, n))
+    Ok((
+        runs.into_iter().flatten().collect(),
+        inputs,
+        (n - skipped, skipped),
+    ))
 }
 
 /// Builds and scores one map of [`run_trajectory`]: one result for S-NDT, one per BKI
@@ -602,6 +623,9 @@ struct StoredResult {
 struct StoredInputs {
     trajectory: String,
     frames: usize,
+    /// Of `frames`, how many were skipped for bad input.
+    #[serde(default)]
+    skipped: usize,
     inputs: BTreeMap<String, Vec<[u64; 3]>>,
 }
 
@@ -698,12 +722,13 @@ fn load_job(store: &RunStore, plan: &Plan, name: &str, frames: usize, job: Job) 
 
 fn stored_inputs_of(
     name: &str,
-    frames: usize,
+    (frames, skipped): (usize, usize),
     inputs: &[(Segmentation, Confusion)],
 ) -> StoredInputs {
     StoredInputs {
         trajectory: name.to_string(),
         frames,
+        skipped,
         inputs: inputs
             .iter()
             .map(|(s, c)| (s.tag().to_string(), sparse(c)))
@@ -711,13 +736,14 @@ fn stored_inputs_of(
     }
 }
 
-/// Trajectory `name`'s stored input scores, if the store holds them for every source.
+/// Trajectory `name`'s stored input scores, if the store holds them for every source, and
+/// how many of its frames were skipped.
 fn load_inputs(
     store: &RunStore,
     plan: &Plan,
     name: &str,
     frames: usize,
-) -> Option<Vec<(Segmentation, Confusion)>> {
+) -> Option<(Vec<(Segmentation, Confusion)>, usize)> {
     store.load(&inputs_file(name), |s: StoredInputs| {
         if (&*s.trajectory, s.frames) != (name, frames) {
             return Err(format!(
@@ -734,7 +760,8 @@ fn load_inputs(
                     .ok_or_else(|| format!("no {} labels", source.tag()))?;
                 Ok((source, dense(cells)?))
             })
-            .collect()
+            .collect::<Result<Vec<_>, String>>()
+            .map(|inputs| (inputs, s.skipped))
     })
 }
 
