@@ -4,8 +4,8 @@
 # flash and static RAM, and runs it under QEMU (mps2-an386, Cortex-M4F). The firmware
 # integrates the committed test vector (targets/cortex-m4f/vector/frames.bin), renders a
 # 64x48 view and prints the snapshot CRC and the view's CRC; this script checks both against
-# expected_crc.txt / expected_render_crc.txt and that QEMU exits 0 (the firmware's own
-# verdict, semihosting). Installs what it needs when missing (idempotent; fast when present).
+# expected_crc.txt / expected_render_crc.txt, that QEMU exits 0 (the firmware's own
+# verdict, semihosting) and that no panic call site comes from sndt-core. Installs what it needs when missing (idempotent; fast when present).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -78,6 +78,9 @@ arm-none-eabi-gcc "${ARCH[@]}" "${PICOLIBC[@]}" -Wa,-I,"$VECTOR_DIR" \
 arm-none-eabi-gcc "${ARCH[@]}" "${PICOLIBC[@]}" -DPICOLIBC_INTEGER_PRINTF_SCANF \
     -T "$FW_SRC/mps2-an386.ld" -Wl,-z,noexecstack -Wl,-Map="$BUILD/sndt-c-firmware.map" \
     -o "$ELF" "$BUILD/main.o" "$BUILD/vector.o" "$LIB"
+
+step "panic call sites: none may come from sndt-core (the C API's Rust code is listed)"
+bash scripts/panic-sites.sh "$ELF"
 
 step "C firmware size"
 # size -A: section sizes in bytes. Flash = what is loaded from flash (.init: vector table and

@@ -139,7 +139,8 @@ impl Batch {
         (row0, rows): (usize, usize),
         (col0, n): (usize, usize),
     ) {
-        let stride = image.stride as usize;
+        // `max(1)`: a validated image has stride >= 1; step_by(0) would panic.
+        let stride = (image.stride as usize).max(1);
         let width = image.camera.width as usize;
         let n = n.min(TILE_COLS);
         let mut xs = [0.0f32; TILE_COLS];
@@ -187,13 +188,19 @@ impl Batch {
                 _ => votes.fill(0),
             }
             if image.kind == DepthKind::Range {
-                for j in start..end {
+                let [p0, p1, p2] = &mut self.p;
+                let (p0, p1, p2) = (
+                    lanes(p0, start, end),
+                    lanes(p1, start, end),
+                    lanes(p2, start, end),
+                );
+                let points = xs.iter().zip(p0).zip(p1).zip(p2);
+                for (((&x, p0), p1), p2) in points {
                     // Undo the planar scaling: scale = d / |ray| instead of d.
-                    let (x, d) = (xs[j - start], self.p[2][j]);
-                    let scale = d / sqrt(x * x + y * y + 1.0);
-                    self.p[0][j] = x * scale;
-                    self.p[1][j] = y * scale;
-                    self.p[2][j] = scale;
+                    let scale = *p2 / sqrt(x * x + y * y + 1.0);
+                    *p0 = x * scale;
+                    *p1 = y * scale;
+                    *p2 = scale;
                 }
             }
         }
@@ -234,7 +241,7 @@ impl Batch {
                 if m == TILE_COLS {
                     self.put_full_row(xs, y, &row, start)
                 } else {
-                    self.put_row(&xs[..n], y, row[..m].iter(), start)
+                    self.put_row(&xs[..n], y, row.iter().take(m), start)
                 }
             }
         }
@@ -402,6 +409,11 @@ impl Batch {
     pub(crate) fn point(&self, j: usize) -> [f32; 3] {
         [self.p[0][j], self.p[1][j], self.p[2][j]]
     }
+}
+
+/// Lanes `start..end` of one coordinate of a batch (none if out of range).
+fn lanes(p: &mut [f32; BATCH], start: usize, end: usize) -> &mut [f32] {
+    p.get_mut(start..end).unwrap_or(&mut [])
 }
 
 /// `floor(t)` for `|t| < 2^22` (the key range in quanta is within `2^21`), equal to the

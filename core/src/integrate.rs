@@ -120,7 +120,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let (w, h) = (image.camera.width as usize, image.camera.height as usize);
         let per_row = w.div_ceil(stride);
         let tile_rows = BATCH / TILE_COLS;
-        for strip in (0..h).step_by(stride * tile_rows) {
+        // `max(1)`: a validated image has stride >= 1; step_by(0) would panic.
+        for strip in (0..h).step_by((stride * tile_rows).max(1)) {
             let mut done = 0;
             while done < per_row {
                 let n = (per_row - done).min(TILE_COLS);

@@ -249,7 +249,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// Turns the z-buffer into the output: no hit is (`INVALID_LABEL`, 0); a pixel where
     /// two Gaussians tied (flagged by a negative distance) is cast by [`Map::raycast`].
     fn resolve(&self, view: &View, labels: &mut [u8], distance: &mut [f32]) {
-        let w = view.camera.width as usize;
+        // `max(1)`: a view has pixels (checked), and a division by 0 would panic.
+        let w = (view.camera.width as usize).max(1);
         let origin = Point3::from(view.origin);
         for (i, (l, d)) in labels.iter_mut().zip(distance.iter_mut()).enumerate() {
             if *d == f32::INFINITY {

@@ -92,10 +92,10 @@ pub(crate) type VotingClasses = heapless::Vec<u8, MAX_TOP_K, u8>;
 pub(crate) fn voting_classes(labels: &Labels, cfg: &Config) -> VotingClasses {
     let k = (cfg.top_k as usize).min(labels.len as usize);
     let mut classes = VotingClasses::new();
-    for i in 0..k {
-        if labels.classes[i] >= 1 && labels.scores[i] >= cfg.min_score {
-            // Cannot fail: k <= labels.len <= MAX_TOP_K.
-            let _ = classes.push(labels.classes[i]);
+    for (&class, &score) in labels.classes.iter().zip(&labels.scores).take(k) {
+        if class >= 1 && score >= cfg.min_score {
+            // Cannot fail: at most MAX_TOP_K labels.
+            let _ = classes.push(class);
         }
     }
     classes

@@ -285,18 +285,19 @@ pub(crate) fn scatter(n: i64, s1: &[i64; 3], s2: &[i64; 6]) -> [i64; 6] {
 /// Most voted class (1-based) of a histogram and its share of the votes; ties go to the
 /// lower class, and an empty histogram has none.
 pub(crate) fn argmax(hist: &[u8]) -> Option<(u8, f32)> {
-    let mut best = 0usize;
+    // (index, votes) of the best so far; a class needs a vote to lead.
+    let mut best = (0usize, 0u8);
     let mut total = 0u32;
     for (i, &b) in hist.iter().enumerate() {
         total += b as u32;
-        if b > hist[best] {
-            best = i;
+        if b > best.1 {
+            best = (i, b);
         }
     }
     if total == 0 {
         None
     } else {
-        Some((best as u8 + 1, hist[best] as f32 / total as f32))
+        Some((best.0 as u8 + 1, best.1 as f32 / total as f32))
     }
 }
 

@@ -71,6 +71,11 @@ static void init_checks(sndt_map *map) {
     bad = cfg;
     bad.miss_model = 7;
     EXPECT(sndt_map_init(map, SNDT_MAP_BYTES, &bad), SNDT_ERR_CONFIG);
+    /* Valid numbers, but rays of more than 4096 cells: refused (work per ray is bounded). */
+    bad = cfg;
+    bad.max_range = 4097.0f * cfg.cell_size;
+    EXPECT(sndt_map_init(map, SNDT_MAP_BYTES, &bad), SNDT_ERR_CONFIG);
+    bad.miss_model = 7; /* sndt_map_config below must overwrite every field */
     for (i = 0; i < sizeof storage && storage[i] == 0xAB; i++) {
     }
     TRUE(i == sizeof storage); /* failed inits wrote nothing */
