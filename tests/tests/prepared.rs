@@ -609,3 +609,32 @@ fn cloud_writes_the_frames_world_points() {
     assert!(e.contains("s/c/0004"), "{e}");
     std::fs::remove_dir_all(&root).unwrap();
 }
+
+/// Regression (found by `fuzz/fuzz_targets/png.rs`): a PNG header claiming 2048 x
+/// 1929379840 pixels made the reader allocate its 7.9 TB output buffer and abort the
+/// process; it is now an error naming the size, for depth and labels alike.
+#[test]
+fn png_claiming_a_huge_size_is_an_error_not_an_abort() {
+    type Read = fn(&[u8]) -> anyhow::Result<()>;
+    let readers: [(png::BitDepth, Read); 2] = [
+        (png::BitDepth::Sixteen, |b| {
+            prepared::depth_png_from_bytes(b).map(|_| ())
+        }),
+        (png::BitDepth::Eight, |b| {
+            prepared::labels_png_from_bytes(b).map(|_| ())
+        }),
+    ];
+    for (depth, read) in readers {
+        let path = scratch("huge-png").join("one.png");
+        write_png(&path, 1, 1, depth, &[0, 0][..depth as usize / 8]);
+        let mut bytes = std::fs::read(&path).unwrap();
+        // IHDR: length 8..12, type 12..16, width 16..20, height 20..24, CRC 29..33.
+        bytes[16..20].copy_from_slice(&2048u32.to_be_bytes());
+        bytes[20..24].copy_from_slice(&0x7300_0000u32.to_be_bytes());
+        let mut crc = sndt_core::Crc32::new();
+        crc.update(&bytes[12..29]);
+        bytes[29..33].copy_from_slice(&crc.finish().to_be_bytes());
+        let e = format!("{:#}", read(&bytes).unwrap_err());
+        assert!(e.contains("2048x1929379840 image too large"), "{e}");
+    }
+}

@@ -526,3 +526,16 @@ fn labels_pair_within_the_sync_tolerance_and_raw_distorted_images_are_refused() 
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Regression (found by `fuzz/fuzz_targets/mcap.rs`; the input is in its corpus): a record
+/// inside a zstd chunk whose length claims 36 PB made the mcap crate allocate that much and
+/// abort the process; the reader now refuses the bag with an error.
+#[test]
+fn a_record_claiming_a_huge_length_is_an_error_not_an_abort() {
+    let bytes = include_bytes!("../../fuzz/corpus/mcap/crash-huge-record-length");
+    let path = temp("huge-record").join("bag.mcap");
+    let e = Bag::from_bytes(&path, bytes.to_vec(), &BagOptions::default())
+        .err()
+        .expect("a corrupt record length must be refused");
+    assert!(format!("{e:#}").contains("truncated or corrupt"), "{e:#}");
+}

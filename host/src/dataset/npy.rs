@@ -13,8 +13,9 @@
 use crate::dataset::frame::TopK;
 use anyhow::{bail, Context, Result};
 use npyz::WriterBuilder;
+use std::fmt::Display;
 use std::fs::File;
-use std::io::{BufReader, BufWriter};
+use std::io::{BufReader, BufWriter, Read};
 use std::path::Path;
 
 /// Largest score that can be encoded: `class + score` must stay below `class + 1`.
@@ -75,8 +76,24 @@ pub fn decode(v: f32) -> Option<(u8, f32)> {
 pub fn read_topk(path: &Path, width: u32, height: u32) -> Result<TopK> {
     let shown = path.display();
     let file = File::open(path).with_context(|| format!("{shown}: opening predictions"))?;
-    let npy = npyz::NpyFile::new(BufReader::new(file))
-        .with_context(|| format!("{shown}: not a readable .npy file"))?;
+    read_topk_from(BufReader::new(file), &shown, width, height)
+}
+
+/// [`read_topk`] of a `.npy` image from any reader (bytes in memory, for example), its
+/// errors naming the source `shown`.
+///
+/// ```
+/// use sndt_host::dataset::npy::read_topk_from;
+/// assert!(read_topk_from(&b"not npy"[..], &"memory", 1, 1).is_err());
+/// ```
+pub fn read_topk_from(
+    src: impl Read,
+    shown: &dyn Display,
+    width: u32,
+    height: u32,
+) -> Result<TopK> {
+    let npy =
+        npyz::NpyFile::new(src).with_context(|| format!("{shown}: not a readable .npy file"))?;
     let dtype = npy.dtype();
     match &dtype {
         npyz::DType::Plain(t) if t.type_char() == npyz::TypeChar::Float && t.size_field() == 4 => {}

@@ -25,8 +25,9 @@ use crate::dataset::source::{BadFrame, OpenOptions};
 use anyhow::{bail, Context, Result};
 use sndt_core::{DepthKind, Isometry3, Pinhole, Translation3, UnitQuaternion};
 use std::collections::HashMap;
+use std::fmt::Display;
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Write};
+use std::io::{BufRead, BufReader, BufWriter, Cursor, Seek, Write};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
@@ -541,7 +542,19 @@ fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
 fn read_png(path: &Path, depth: png::BitDepth) -> Result<(u32, u32, Vec<u8>)> {
     let shown = path.display();
     let file = File::open(path).with_context(|| format!("{shown}: opening"))?;
-    let mut decoder = png::Decoder::new(BufReader::new(file));
+    decode_png(BufReader::new(file), &shown, depth)
+}
+
+/// Largest decoded PNG accepted: 256 MiB, 64 times a 1024x768 uint16 frame.
+const MAX_PNG_BYTES: usize = 1 << 28;
+
+/// [`read_png`] from any reader, its errors naming the source `shown`.
+fn decode_png(
+    src: impl BufRead + Seek,
+    shown: &dyn Display,
+    depth: png::BitDepth,
+) -> Result<(u32, u32, Vec<u8>)> {
+    let mut decoder = png::Decoder::new(src);
     decoder.set_transformations(png::Transformations::IDENTITY);
     let mut reader = decoder
         .read_info()
@@ -551,9 +564,12 @@ fn read_png(path: &Path, depth: png::BitDepth) -> Result<(u32, u32, Vec<u8>)> {
     if color != png::ColorType::Grayscale || bits != depth {
         bail!("{shown}: {color:?} {bits:?} PNG, expected Grayscale {depth:?}");
     }
+    // The header alone sets the buffer size: a 100-byte file can claim terabytes, whose
+    // allocation would abort the process instead of failing.
     let size = reader
         .output_buffer_size()
-        .with_context(|| format!("{shown}: image too large"))?;
+        .filter(|&n| n <= MAX_PNG_BYTES)
+        .with_context(|| format!("{shown}: {w}x{h} image too large"))?;
     let mut buf = vec![0u8; size];
     reader
         .next_frame(&mut buf)
@@ -564,11 +580,30 @@ fn read_png(path: &Path, depth: png::BitDepth) -> Result<(u32, u32, Vec<u8>)> {
 /// uint16 grayscale PNG (big-endian samples).
 fn read_png16(path: &Path) -> Result<(u32, u32, Vec<u16>)> {
     let (w, h, raw) = read_png(path, png::BitDepth::Sixteen)?;
-    let v = raw
-        .chunks_exact(2)
+    Ok((w, h, big_endian_u16(&raw)))
+}
+
+fn big_endian_u16(raw: &[u8]) -> Vec<u16> {
+    raw.chunks_exact(2)
         .map(|b| u16::from_be_bytes([b[0], b[1]]))
-        .collect();
-    Ok((w, h, v))
+        .collect()
+}
+
+/// The depth PNG reader (uint16 grayscale, millimetres) on bytes in memory:
+/// `(width, height, samples)`.
+///
+/// ```
+/// use sndt_host::dataset::prepared::depth_png_from_bytes;
+/// assert!(depth_png_from_bytes(b"not a PNG").is_err());
+/// ```
+pub fn depth_png_from_bytes(bytes: &[u8]) -> Result<(u32, u32, Vec<u16>)> {
+    let (w, h, raw) = decode_png(Cursor::new(bytes), &"PNG bytes", png::BitDepth::Sixteen)?;
+    Ok((w, h, big_endian_u16(&raw)))
+}
+
+/// The label PNG reader (uint8 grayscale) on bytes in memory: `(width, height, labels)`.
+pub fn labels_png_from_bytes(bytes: &[u8]) -> Result<(u32, u32, Vec<u8>)> {
+    decode_png(Cursor::new(bytes), &"PNG bytes", png::BitDepth::Eight)
 }
 
 fn read_png8(path: &Path) -> Result<(u32, u32, Vec<u8>)> {

@@ -71,8 +71,33 @@ fn decode<T: serde::de::DeserializeOwned>(topic: &str, log_time: u64, data: &[u8
 /// A CDR message of the bag: topic, schema name, log time, bytes.
 type RawMessage = (String, String, u64, Vec<u8>);
 
+/// Longest record accepted, inside chunks too: 256 MiB, dozens of full-size depth images.
+const MAX_RECORD_BYTES: usize = 1 << 28;
+
+/// Reads every record once, chunks decompressed, refusing any longer than
+/// [`MAX_RECORD_BYTES`]. The mcap crate's message stream trusts the lengths inside a chunk
+/// and allocates whatever one claims, so a corrupt length would abort the process (or
+/// take all memory) instead of failing.
+fn check_record_lengths(bytes: &[u8]) -> Result<()> {
+    use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
+    let options = LinearReaderOptions::default().with_record_length_limit(MAX_RECORD_BYTES);
+    let mut reader = LinearReader::new_with_options(options);
+    let mut rest = bytes;
+    while let Some(event) = reader.next_event() {
+        let event = event.context("reading the MCAP file (truncated or corrupt?)")?;
+        if let LinearReadEvent::ReadRequest(n) = event {
+            let n = n.min(rest.len());
+            reader.insert(n).copy_from_slice(&rest[..n]);
+            reader.notify_read(n);
+            rest = &rest[n..];
+        }
+    }
+    Ok(())
+}
+
 /// Every CDR message of the bag.
 fn messages(bytes: &[u8]) -> Result<Vec<RawMessage>> {
+    check_record_lengths(bytes)?;
     let mut out = Vec::new();
     for m in mcap::MessageStream::new(bytes).context("not an MCAP file")? {
         let m = m.context("reading the MCAP file (truncated or corrupt?)")?;
@@ -152,6 +177,12 @@ impl Bag {
     /// Opens and indexes a bag.
     pub fn open(path: &Path, o: &BagOptions) -> Result<Bag> {
         let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+        Bag::from_bytes(path, bytes, o)
+    }
+
+    /// [`Bag::open`] of a bag already in memory; `path` only names it (in errors, and its
+    /// stem as the frames' scene).
+    pub fn from_bytes(path: &Path, bytes: Vec<u8>, o: &BagOptions) -> Result<Bag> {
         let msgs = messages(&bytes).with_context(|| format!("{}", path.display()))?;
         drop(bytes);
         let topics = topic_table(&msgs)?;
