@@ -6,6 +6,21 @@ use sndt_core::{
     Pinhole, Point3, VoxelKey,
 };
 
+/// The proptest config of every property test here, with `cases` cases. Failing cases
+/// are saved next to the test's source, in `tests/tests/<file>.proptest-regressions`
+/// (commit them; they are replayed first on every run). Proptest's default looks for a
+/// `lib.rs` or `main.rs` above the test file to put them beside `src/`, finds none for
+/// integration tests, and warns before falling back to this same place.
+pub fn proptest_config(cases: u32) -> proptest::test_runner::Config {
+    proptest::test_runner::Config {
+        cases,
+        failure_persistence: Some(Box::new(
+            proptest::test_runner::FileFailurePersistence::WithSource("proptest-regressions"),
+        )),
+        ..proptest::test_runner::Config::default()
+    }
+}
+
 /// Byte offset of the `frames` counter in a snapshot header (magic 4, version 2, classes 2,
 /// capacities 8, config 60; see `core/src/snapshot.rs`).
 pub const SNAPSHOT_FRAMES_OFFSET: usize = 76;

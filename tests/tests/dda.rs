@@ -81,7 +81,7 @@ fn check_walk(visited: &[VoxelKey], first: VoxelKey, last: VoxelKey) {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+    #![proptest_config(sndt_tests::proptest_config(256))]
 
     /// `voxels_on_segment` visits exactly the voxels that dense sampling and
     /// the exact reference find, in order, each step to a face neighbour.
@@ -151,7 +151,7 @@ fn rotation() -> impl Strategy<Value = UnitQuaternion<f32>> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 128, ..ProptestConfig::default() })]
+    #![proptest_config(sndt_tests::proptest_config(128))]
 
     /// Free space of one point, `MissModel::Constant`: the cells with negative log-odds are
     /// exactly the voxels the segment from the sensor to the core's ray target passes

@@ -199,7 +199,7 @@ fn check_frame(
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 384, ..ProptestConfig::default() })]
+    #![proptest_config(sndt_tests::proptest_config(384))]
 
     #[test]
     fn garbage_never_panics(

@@ -110,7 +110,7 @@ fn run(map: &mut BigMap, frame: &Frame, permuted: bool) -> FrameReport {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+    #![proptest_config(sndt_tests::proptest_config(64))]
 
     #[test]
     fn frame_is_independent_of_point_order(cfg in config(), a in frame(), b in frame()) {

@@ -281,7 +281,7 @@ fn voxel_offset(snap: &[u8], i: usize) -> usize {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 384, ..ProptestConfig::default() })]
+    #![proptest_config(sndt_tests::proptest_config(384))]
 
     /// Any single corrupted byte is detected and leaves the target map untouched.
     #[test]
