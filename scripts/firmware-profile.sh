@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Where the Cortex-M4F firmware spends its instructions (opt-in; not part of the test
+# command). Runs the firmware built by scripts/firmware.sh under QEMU with its execution log
+# (-d in_asm,exec,nochain) streamed through a FIFO into scripts/profile/tb_profile.py, which
+# counts the instructions executed per address and attributes them to functions, inlined
+# sndt-core functions and lines (llvm-addr2line -i), and software floating point calls to
+# their callers. The whole firmware run is profiled: setup, the 4 frames, probes, CRC and
+# the 64x48 view. Takes about a minute.
+#
+# Usage: bash scripts/firmware-profile.sh [ELF]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+ELF="${1:-targets/cortex-m4f/target/thumbv7em-none-eabihf/release/sndt-cortex-m4f}"
+if [[ ! -f "$ELF" ]]; then
+    echo "error: $ELF not found; build it with bash scripts/firmware.sh" >&2
+    exit 1
+fi
+for tool in qemu-system-arm llvm-addr2line python3; do
+    command -v "$tool" >/dev/null || { echo "error: $tool not found (bash scripts/firmware.sh and panic-sites.sh install QEMU and llvm)" >&2; exit 1; }
+done
+
+dir="$(mktemp -d)"
+trap 'rm -rf "$dir"' EXIT
+mkfifo "$dir/log"
+python3 scripts/profile/tb_profile.py "$dir/log" "$ELF" &
+reader=$!
+timeout 600 qemu-system-arm -cpu cortex-m4 -machine mps2-an386 -nographic -monitor none \
+    -serial none -semihosting-config enable=on,target=native -icount shift=0 -kernel "$ELF" \
+    -d in_asm,exec,nochain -D "$dir/log" >/dev/null
+wait "$reader"
