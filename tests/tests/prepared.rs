@@ -638,3 +638,25 @@ fn png_claiming_a_huge_size_is_an_error_not_an_abort() {
         assert!(e.contains("2048x1929379840 image too large"), "{e}");
     }
 }
+
+/// Regression (found by `fuzz/fuzz_targets/npy.rs`): a 200-byte `.npy` whose header nests
+/// 40 brackets kept the npy parser busy for minutes (its time grows exponentially with the
+/// depth); the reader now refuses such a header at once.
+#[test]
+fn npy_header_nested_deeply_is_refused_at_once() {
+    let header = format!(
+        "{{'descr': '<f4', 'fortran_order': False, 'shape': (3,{}1, 1), }}\n",
+        "[".repeat(40)
+    );
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend((header.len() as u16).to_le_bytes());
+    bytes.extend(header.as_bytes());
+    bytes.extend([0u8; 12]);
+    let start = std::time::Instant::now();
+    let e = format!(
+        "{:#}",
+        npy::read_topk_from(&bytes[..], &"deep.npy", 1, 1).unwrap_err()
+    );
+    assert!(e.contains("nested 42 deep"), "{e}");
+    assert!(start.elapsed().as_secs() < 5, "took {:?}", start.elapsed());
+}

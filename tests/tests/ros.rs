@@ -539,3 +539,27 @@ fn a_record_claiming_a_huge_length_is_an_error_not_an_abort() {
         .expect("a corrupt record length must be refused");
     assert!(format!("{e:#}").contains("truncated or corrupt"), "{e:#}");
 }
+
+/// Regression (found by `fuzz/fuzz_targets/mcap.rs`; the input is in its corpus): a
+/// transform chain whose pose is not finite as f32 (or not a rotation) gave a frame that
+/// `Frame::validate` refuses and the core would refuse while mapping; the reader now
+/// skips it when pairing, naming the reason, like other unusable depth images.
+#[test]
+fn a_pose_the_core_refuses_skips_the_frame_with_the_reason() {
+    let bytes = include_bytes!("../../fuzz/corpus/mcap/crash-invalid-pose");
+    let path = temp("invalid-pose").join("bag.mcap");
+    let bag = Bag::from_bytes(&path, bytes.to_vec(), &BagOptions::default()).unwrap();
+    for id in bag.frames() {
+        let f = bag.load(id).unwrap();
+        assert!(
+            sndt_core::validate_pose(&f.pose).is_ok(),
+            "{id}: {:?}",
+            f.pose
+        );
+    }
+    let reasons: Vec<&str> = bag.skipped.iter().map(|(_, r)| r.as_str()).collect();
+    assert!(
+        reasons.iter().any(|r| r.contains("not finite as f32")),
+        "{reasons:?}"
+    );
+}

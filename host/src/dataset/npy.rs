@@ -92,6 +92,7 @@ pub fn read_topk_from(
     width: u32,
     height: u32,
 ) -> Result<TopK> {
+    let src = check_header_nesting(src, shown)?;
     let npy =
         npyz::NpyFile::new(src).with_context(|| format!("{shown}: not a readable .npy file"))?;
     let dtype = npy.dtype();
@@ -142,6 +143,36 @@ pub fn read_topk_from(
         }
     }
     Ok(out)
+}
+
+/// Deepest bracket nesting accepted in a `.npy` header; a float32 `(3, H, W)` file's has 2
+/// (`{'shape': (3, H, W)}`).
+const MAX_HEADER_NESTING: usize = 8;
+
+/// Refuses a header nested deeper than [`MAX_HEADER_NESTING`] before npyz parses it: its
+/// parser takes time exponential in the depth (a 200-byte header with 40 `[` ran for
+/// minutes). Returns the source with the bytes it read put back in front.
+fn check_header_nesting(mut src: impl Read, shown: &dyn Display) -> Result<impl Read> {
+    // Magic (6), version (2), length (2 or 4), then the header, of at most 65535 bytes in
+    // version 1 and in practice in all versions.
+    let mut head = Vec::new();
+    src.by_ref()
+        .take(12 + 65535)
+        .read_to_end(&mut head)
+        .with_context(|| format!("{shown}: reading the .npy header"))?;
+    let (mut depth, mut deepest) = (0usize, 0usize);
+    for &b in head.iter().skip(10).take_while(|&&b| b != b'\n') {
+        match b {
+            b'[' | b'(' | b'{' => depth += 1,
+            b']' | b')' | b'}' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+        deepest = deepest.max(depth);
+    }
+    if deepest > MAX_HEADER_NESTING {
+        bail!("{shown}: .npy header nested {deepest} deep (at most {MAX_HEADER_NESTING})");
+    }
+    Ok(std::io::Cursor::new(head).chain(src))
 }
 
 /// Writes `topk` as a C-order float32 `(3, height, width)` file, the exact inverse of

@@ -11,7 +11,7 @@ use crate::dataset::frame::{Frame, FrameId, Rays};
 pub use crate::dataset::source::BagOptions;
 use crate::dataset::source::Dataset;
 use anyhow::{anyhow, bail, Context, Result};
-use sndt_core::{DepthKind, Pinhole};
+use sndt_core::{validate_pose, DepthKind, Pinhole};
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -71,8 +71,10 @@ fn decode<T: serde::de::DeserializeOwned>(topic: &str, log_time: u64, data: &[u8
 /// A CDR message of the bag: topic, schema name, log time, bytes.
 type RawMessage = (String, String, u64, Vec<u8>);
 
-/// Longest record accepted, inside chunks too: 256 MiB, dozens of full-size depth images.
-const MAX_RECORD_BYTES: usize = 1 << 28;
+/// Longest record accepted, inside chunks too: 64 MiB, twenty 1024x768 float depth
+/// images. Each record may be buffered at this size before its data turns out to be
+/// missing, so the limit also bounds the memory a corrupt bag can take.
+const MAX_RECORD_BYTES: usize = 1 << 26;
 
 /// Reads every record once, chunks decompressed, refusing any longer than
 /// [`MAX_RECORD_BYTES`]. The mcap crate's message stream trusts the lengths inside a chunk
@@ -285,12 +287,22 @@ impl Bag {
         let pose =
             p.tf.lookup(world, &depth.header.frame_id, stamp)
                 .with_context(|| at(depth_topic))?;
+        // The f32 pose the core gets: a transform chain can be finite in f64 and not in f32,
+        // or far from a rotation; such a frame is skipped here, named, like other unusable
+        // ones, not refused by the core while mapping.
+        let pose = to_pose(&pose);
+        if validate_pose(&pose).is_err() {
+            bail!(
+                "{}: the camera pose in {world} is not finite as f32 or its rotation is not unit",
+                at(depth_topic)
+            );
+        }
         Ok(BagFrame {
             stamp,
             depth,
             labels,
             camera,
-            pose: to_pose(&pose),
+            pose,
         })
     }
 
