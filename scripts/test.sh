@@ -40,6 +40,9 @@ bash scripts/ros.sh
 step "aarch64: sndt-core tests (unit, property, doc) and the CRC check under qemu-aarch64"
 bash scripts/aarch64.sh
 
+step "fuzzing smoke: fmt and clippy of fuzz/, every target over its corpus plus bounded runs"
+bash scripts/fuzz.sh --smoke
+
 step "cargo doc without warnings"
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --quiet
 
