@@ -140,6 +140,16 @@ fn map(root: &Path, extra: &[&str]) -> (i32, String, String) {
     sndt_out(&args)
 }
 
+/// Asserts that `err` warns that frame `synth_00_living/cam_00/<frame>` was skipped because
+/// of `file`, for `why`.
+fn assert_skipped(err: &str, frame: &str, file: &Path, why: &str) {
+    let want = format!(
+        "warning: skipping frame synth_00_living/cam_00/{frame}: {}: {why}",
+        file.display()
+    );
+    assert!(err.contains(&want), "{err}");
+}
+
 /// Replaces `"key": <number>` in a JSON record by `"key": value`.
 fn set_json(path: &Path, key: &str, value: &str) {
     let text = std::fs::read_to_string(path).unwrap();
@@ -230,12 +240,11 @@ fn bad_extrinsics_are_skipped_naming_the_file_value_and_range() {
     set_json(&file, "x", "1e39");
     let (code, out, err) = map(&root, &[]);
     assert_eq!(code, 0, "{out}{err}");
-    assert!(
-        err.contains(&format!(
-            "warning: skipping frame synth_00_living/cam_00/0002: {}: position x = 1e39 is not finite as f32",
-            file.display()
-        )),
-        "{err}"
+    assert_skipped(
+        &err,
+        "0002",
+        &file,
+        "position x = 1e39 is not finite as f32",
     );
     assert!(out.contains("cam_00: 2 frames, 1 skipped"), "{out}");
     assert!(out.contains("2 frames mapped, 1 skipped"), "{out}");
@@ -260,13 +269,7 @@ fn bad_frames_are_skipped_and_a_run_without_any_fails() {
     std::fs::write(&png, b"not a PNG").unwrap();
     let (code, out, err) = map(&root, &[]);
     assert_eq!(code, 0, "{out}{err}");
-    assert!(
-        err.contains(&format!(
-            "warning: skipping frame synth_00_living/cam_00/0001: {}: not a readable PNG",
-            png.display()
-        )),
-        "{err}"
-    );
+    assert_skipped(&err, "0001", &png, "not a readable PNG");
     assert!(out.contains("2 frames mapped, 1 skipped"), "{out}");
     // Nothing usable left: an error, with the last reason.
     for k in [0, 2] {
@@ -433,13 +436,7 @@ fn an_experiment_skips_bad_frames_and_counts_them() {
     std::fs::write(&png, b"not a PNG").unwrap();
     let (code, out, err) = experiment(&root, &["--labels", "gt"]);
     assert_eq!(code, 0, "{out}{err}");
-    assert!(
-        err.contains(&format!(
-            "warning: skipping frame synth_00_living/cam_00/0001: {}: not a readable PNG",
-            png.display()
-        )),
-        "{err}"
-    );
+    assert_skipped(&err, "0001", &png, "not a readable PNG");
     assert!(
         out.contains(
             "1 trajectories, 2 frames mapped, 1 skipped (bad input, named in the warnings)"

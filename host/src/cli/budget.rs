@@ -67,14 +67,7 @@ pub fn budget(a: &BudgetArgs) -> Result<String> {
         return Ok(s);
     };
     let config = Config::with_cell_size(cell);
-    let option = format!("--cell {cell}");
-    super::parse::check_config(
-        &config,
-        &[
-            (sndt_core::ConfigField::CellSize, &option),
-            (sndt_core::ConfigField::RayCells, &option),
-        ],
-    )?;
+    super::parse::check_cell_config(&config, cell)?;
     let Some(cap) = pick_capacity(capacity, blocks) else {
         bail!(
             "no compiled capacity holds {capacity} voxels and {blocks} blocks (largest: {:?})",

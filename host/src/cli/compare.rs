@@ -150,14 +150,7 @@ fn configs(cells: &[f32], constant_miss: bool) -> Result<Vec<Config>> {
             if constant_miss {
                 config.miss_model = MissModel::Constant;
             }
-            let option = format!("--cell {c}");
-            super::parse::check_config(
-                &config,
-                &[
-                    (sndt_core::ConfigField::CellSize, &option),
-                    (sndt_core::ConfigField::RayCells, &option),
-                ],
-            )?;
+            super::parse::check_cell_config(&config, c)?;
             Ok(config)
         })
         .collect()

@@ -58,14 +58,7 @@ struct Runs {
 pub fn run(a: &DemoArgs) -> Result<()> {
     let start = Instant::now();
     let config = map_config(a);
-    let option = format!("--cell {}", a.cell);
-    super::parse::check_config(
-        &config,
-        &[
-            (sndt_core::ConfigField::CellSize, &option),
-            (sndt_core::ConfigField::RayCells, &option),
-        ],
-    )?;
+    super::parse::check_cell_config(&config, a.cell)?;
     let split = walk_split(a)?;
     println!(
         "sndt demo: {}, cell {:.0} cm, {} miss",

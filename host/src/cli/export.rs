@@ -4,7 +4,7 @@
 //! trajectory (then, with `--every N`, the bag holds the map as it grows).
 
 use crate::cli::labels::{check_labels, LabelArg};
-use crate::cli::parse::check_config;
+use crate::cli::parse::check_cell_config;
 use crate::dataset::open::open_spec;
 use crate::dataset::source::{usable_frames, OpenOptions};
 use crate::eval::evaluate::load_snapshot;
@@ -15,7 +15,7 @@ use crate::ros::msgs::Time;
 use crate::ros::write::frame_time;
 use crate::semantic_map::{integrate_frame, HostMap};
 use anyhow::Result;
-use sndt_core::{Config, ConfigField};
+use sndt_core::Config;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `sndt export`.
@@ -115,12 +115,7 @@ fn map_first_trajectory(
     mut bag: Option<&mut MapBag>,
 ) -> Result<Box<HostMap>> {
     let config = Config::with_cell_size(cell);
-    let option = format!("--cell {cell}");
-    let fields = [
-        (ConfigField::CellSize, &*option),
-        (ConfigField::RayCells, &*option),
-    ];
-    check_config(&config, &fields)?;
+    check_cell_config(&config, cell)?;
     let dataset = open_spec(spec, &OpenOptions::default())?;
     check_labels(labels, dataset.as_ref(), spec)?;
     let trajectories = dataset.trajectories();

@@ -90,3 +90,25 @@ pub fn check_config(
         None => anyhow::bail!("config: {e}{detail}"),
     }
 }
+
+/// [`check_config`] for a config whose cell size comes from `--cell`: the option is named
+/// for the cell size and for the ray length in cells (which the cell size sets).
+///
+/// ```
+/// use sndt_core::Config;
+/// use sndt_host::cli::parse::check_cell_config;
+/// let e = check_cell_config(&Config::with_cell_size(0.0), 0.0).unwrap_err();
+/// assert!(e.to_string().starts_with("--cell 0: invalid config: cell_size"));
+/// assert!(check_cell_config(&Config::with_cell_size(0.1), 0.1).is_ok());
+/// ```
+pub fn check_cell_config(config: &sndt_core::Config, cell: f32) -> anyhow::Result<()> {
+    use sndt_core::ConfigField;
+    let option = format!("--cell {cell}");
+    check_config(
+        config,
+        &[
+            (ConfigField::CellSize, &option),
+            (ConfigField::RayCells, &option),
+        ],
+    )
+}
