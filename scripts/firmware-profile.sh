@@ -7,11 +7,19 @@
 # their callers. The whole firmware run is profiled: setup, the 4 frames, probes, CRC and
 # the 64x48 view. Takes about a minute.
 #
-# Usage: bash scripts/firmware-profile.sh [ELF]
+# Usage: bash scripts/firmware-profile.sh [--frames | ELF]
+#   --frames  builds the firmware with its `frames-only` feature (own target dir) and
+#             profiles the 4 frames alone: setup and frames, no probes, CRC or view.
+# PROFILE_ADDRESSES=FILE also writes the executions of every instruction address to FILE.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 ELF="${1:-targets/cortex-m4f/target/thumbv7em-none-eabihf/release/sndt-cortex-m4f}"
+if [[ "$ELF" == --frames ]]; then
+    (cd targets/cortex-m4f && CARGO_TARGET_DIR="$PWD/target-frames" \
+        cargo build --release --locked --quiet --features frames-only)
+    ELF=targets/cortex-m4f/target-frames/thumbv7em-none-eabihf/release/sndt-cortex-m4f
+fi
 if [[ ! -f "$ELF" ]]; then
     echo "error: $ELF not found; build it with bash scripts/firmware.sh" >&2
     exit 1

@@ -19,6 +19,7 @@ use crate::key::VoxelKey;
 use crate::labels::{LabeledPoint, Labels};
 use crate::sqrt::sqrt;
 use crate::votes::{vote_hash, voting_classes};
+use crate::key::KEY_LIMIT;
 use crate::voxel::packed_offsets;
 
 /// Points per batch: large enough that the per-batch work vanishes, small enough for a
@@ -311,7 +312,7 @@ impl Batch {
         // fixed trip count); lanes past `len` hold stale values that nobody reads.
         let r: [[f32; 3]; 3] = core::array::from_fn(|i| core::array::from_fn(|c| f.rot[(i, c)]));
         let (origin, inv_quantum) = (f.origin, f.inv_quantum);
-        let (t_min, t_max, max2) = (f.t_min, f.t_max, f.max_range * f.max_range);
+        let max2_bits = (f.max_range * f.max_range).to_bits();
         let (quant_bits, quant_mask, qhalf) = (f.quant_bits, f.quant_mask, f.qhalf);
         let classes = classes.min(u8::MAX as usize) as u8;
         let from_depth = self.from_depth;
@@ -329,24 +330,33 @@ impl Batch {
         } = self;
         for j in 0..BATCH {
             let (x, y, z) = (p[0][j], p[1][j], p[2][j]);
-            // A pixel's z is its depth (or has its sign and finiteness); written so that
-            // NaN fails: the same test as `depth_point`.
-            let no_depth = from_depth && !(z > 0.0 && z < f32::INFINITY);
+            // A pixel's z is its depth (or has its sign and finiteness): it must be
+            // positive and finite, as in `depth_point`. As float bits that is
+            // 1..=0x7f7f_ffff (0, negatives, infinity and NaN are outside), one integer
+            // comparison where two float comparisons cost a flag transfer each on a
+            // Cortex-M.
+            let no_depth = from_depth && z.to_bits().wrapping_sub(1) >= 0x7f7f_ffff;
             let bad_label = vote[j] > classes;
             // Votes known now (one-class label images; others set theirs with the labels).
             let hash = vote_hash(&[x, y, z]);
             vote_key[j] = if vote[j] != 0 { hash >> 1 } else { u32::MAX };
+            // `0 < r2 <= max2` (NaN fails) in float bits, as above; `max2` is positive.
             let r2 = x * x + y * y + z * z;
-            let mut fast = r2 > 0.0 && r2 <= max2;
+            let mut fast = r2.to_bits().wrapping_sub(1) < max2_bits;
             let mut k = [0u32; 3];
             let mut q = [0i32; 3];
             for i in 0..3 {
                 let w = r[i][0] * x + r[i][1] * y + r[i][2] * z + origin[i];
                 let t = w * inv_quantum;
-                fast &= t >= t_min && t < t_max;
-                let m = floor_small(t);
-                k[i] = ((m >> quant_bits) + 32768) as u32 & 0xffff;
-                q[i] = (m & quant_mask) - qhalf + ((t - m as f32) >= 0.5) as i32;
+                let (m, half_up) = floor_and_half(t);
+                // The key range `t_min <= t < t_max` as a range of keys `m >> Q` (both
+                // ends are multiples of 2^Q): -32767..=32767. Exact for a point within
+                // max range, whose |t| is below 2^22 (see `floor_and_half`); other points
+                // are not fast anyway.
+                let key = m >> quant_bits;
+                fast &= (key + KEY_LIMIT) as u32 <= 2 * KEY_LIMIT as u32;
+                k[i] = (key + 32768) as u32 & 0xffff;
+                q[i] = (m & quant_mask) - qhalf + half_up as i32;
             }
             for (axis, qi) in offsets.iter_mut().zip(q) {
                 axis[j] = qi;
@@ -416,16 +426,23 @@ fn lanes(p: &mut [f32; BATCH], start: usize, end: usize) -> &mut [f32] {
     p.get_mut(start..end).unwrap_or(&mut [])
 }
 
-/// `floor(t)` for `|t| < 2^22` (the key range in quanta is within `2^21`), equal to the
-/// scalar path's `floor_i32` there, in operations that vectorise: adding `1.5 * 2^23`
-/// rounds `t` to the nearest integer, which the float's low mantissa bits then hold; one
-/// comparison turns rounding into floor. Other inputs give an unspecified value (such
-/// points are not `FAST`).
+/// `floor(t)` and whether `t - floor(t) >= 0.5` (the scalar path's `floor_i32` and
+/// half-up rounding of the offset) for `|t| < 2^22`, in operations that vectorise and
+/// need one float-to-integer transfer: adding `1.5 * 2^23` rounds `t` to the nearest
+/// integer `n` (ties to even), which the float's low mantissa bits then hold, and
+/// subtracting it again gives `n` as a float exactly. `d = t - n` is exact and in
+/// `[-0.5, 0.5]`: `floor(t)` is `n - 1` when `d < 0`, and `t - floor(t)` is `d + 1`
+/// (at least 0.5) then, else `d`. Other inputs give unspecified values (such points are
+/// not `FAST`: the key range in quanta is within `2^21` plus max range, at most 4,096
+/// cells of at most 64 quanta, `Config::MAX_RAY_CELLS`).
 #[inline]
-fn floor_small(t: f32) -> i32 {
+fn floor_and_half(t: f32) -> (i32, bool) {
     const MAGIC: f32 = 12_582_912.0; // 1.5 * 2^23
-    let rounded = ((t + MAGIC).to_bits() as i32).wrapping_sub(MAGIC.to_bits() as i32);
-    rounded.wrapping_sub((rounded as f32 > t) as i32)
+    let s = t + MAGIC;
+    let nearest = (s.to_bits() as i32).wrapping_sub(MAGIC.to_bits() as i32);
+    let d = t - (s - MAGIC);
+    let below = d < 0.0;
+    (nearest.wrapping_sub(below as i32), below | (d >= 0.5))
 }
 
 #[cfg(test)]
@@ -434,7 +451,7 @@ mod tests {
     use crate::key::floor_i32;
 
     #[test]
-    fn floor_small_is_floor_on_the_key_range() {
+    fn floor_and_half_match_the_scalar_path_on_the_key_range() {
         // The key range in quanta for Q = 6, its edges, halves, tiny and negative values,
         // and a pseudo-random sweep of float bit patterns inside the range.
         let edge = [
@@ -464,7 +481,8 @@ mod tests {
         .filter(|t| t.abs() < 4_194_304.0)
         .take(200_000);
         for t in edge.into_iter().chain(sweep) {
-            assert_eq!(floor_small(t), floor_i32(t), "t = {t:e}");
+            let m = floor_i32(t);
+            assert_eq!(floor_and_half(t), (m, (t - m as f32) >= 0.5), "t = {t:e}");
         }
     }
 }

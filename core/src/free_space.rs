@@ -118,12 +118,17 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// The traversal of [`traverse`] (same voxels, same order), specialised for misses,
     /// for a segment that stays in the key range. The walk keeps only what a step needs
     /// in registers: the cell index in the current block, the block's `missed` mask, and
-    /// per axis the boundary parameter and the voxels left before the next block. A
-    /// voxel that already has its miss (most visits: the rays of a frame share their
-    /// start) costs one bit test and one step; the voxel key is rebuilt from block and
-    /// cell only for a miss and at the end. The end voxel can only be reached with the
-    /// last of the `|end - start|_1` steps, so the loop counts steps instead of
-    /// comparing keys.
+    /// per axis the boundary parameter. A voxel that already has its miss (most visits:
+    /// the rays of a frame share their start) costs one bit test and one step; the voxel
+    /// key is rebuilt from block and cell only for a miss and at the end. The end voxel
+    /// can only be reached with the last of the `|end - start|_1` steps, so the loop
+    /// counts steps instead of comparing keys.
+    ///
+    /// The cell index is kept "in the direction of travel": the 2-bit field of an axis
+    /// walked downwards holds `3 - x` (`flip` has those fields set), so every step adds
+    /// one to a field, and a field at 3 means the step leaves the block (the field wraps
+    /// to 0 and the block key steps). Masks and increments are then constants, which
+    /// leaves registers for the rest on 32-bit targets.
     fn walk(&mut self, f: &mut FrameState, cache: &mut GaussCache, seg: &Segment) {
         let (o, target, start, end) = (seg.o, seg.target, seg.start, seg.end);
         let dda = Dda::new(o, [0, 1, 2].map(|a| target[a] - o[a]), start);
@@ -132,22 +137,18 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let Some(key) = VoxelKey::from_ints(start[0], start[1], start[2]) else {
             return;
         };
-        let (mut block, mut cell) = (key.block(), key.cell());
-        // Per axis: the step of the packed block key (+-1 in that axis's 16-bit field),
-        // the step of the cell index, and the steps left before the walk leaves the block
-        // (then the axis's cell field wraps 3 <-> 0: `cell ^ mask`).
-        let axis = |a: usize, at: u32| {
-            let s = dda.step[a];
-            let c = (start[a] & 3) as u32;
-            let left = if s > 0 { 3 - c } else { c };
-            (((s as i64) << at) as u64, (s << (2 * a)) as u32, left)
-        };
-        let (b0, c0, mut left0) = axis(0, 32);
-        let (b1, c1, mut left1) = axis(1, 16);
-        let (b2, c2, mut left2) = axis(2, 0);
+        let down = |a: usize| dda.step[a] < 0;
+        let flip =
+            (down(0) as u32 * X_FIELD) | (down(1) as u32 * Y_FIELD) | (down(2) as u32 * Z_FIELD);
+        // The step of the packed block key per axis: +-1 in that axis's 16-bit field.
+        let block_step = |a: usize, at: u32| ((dda.step[a] as i64) << at) as u64;
+        let (b0, b1, b2) = (block_step(0, 32), block_step(1, 16), block_step(2, 0));
+        let mut block = key.block();
+        let mut walked = key.cell() ^ flip;
         let mut remaining: u32 = (0..3).map(|a| (end[a] - start[a]).unsigned_abs()).sum();
         let (mut at, mut missed) = self.enter_block(f, block);
         loop {
+            let cell = walked ^ flip;
             if !has_cell(missed, cell) {
                 match self.walk_visit(f, cache, seg, at, (block, cell), remaining == 0) {
                     Some(m) => missed = m,
@@ -165,20 +166,26 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             if (if z { t2 } else { t01 }) > 1.0 + 1e-4 {
                 return;
             }
-            // Within the block the cell index moves; across a boundary the axis's cell
-            // field wraps and the block key steps.
-            let crossed = if z {
+            let axis = if z {
                 t2 += d2;
-                step_axis(&mut left2, &mut cell, c2, 48, b2)
+                2
             } else if y {
                 t1 += d1;
-                step_axis(&mut left1, &mut cell, c1, 12, b1)
+                1
             } else {
                 t0 += d0;
-                step_axis(&mut left0, &mut cell, c0, 3, b0)
+                0
             };
-            if let Some(block_step) = crossed {
-                block = block.wrapping_add(block_step);
+            let field = X_FIELD << (2 * axis);
+            if walked & field != field {
+                walked += 1 << (2 * axis);
+            } else {
+                walked &= !field;
+                block = block.wrapping_add(match axis {
+                    0 => b0,
+                    1 => b1,
+                    _ => b2,
+                });
                 (at, missed) = self.enter_block(f, block);
             }
         }
@@ -420,27 +427,10 @@ fn has_cell(mask: u64, cell: u32) -> bool {
     }
 }
 
-/// One walk step on an axis with `left` voxels to go in the block: the cell index moves
-/// by `cell_step`, or on leaving the block the axis's field (`wrap`) flips 3 <-> 0 and the
-/// block key's step `block_step` is returned.
-#[inline(always)]
-fn step_axis(
-    left: &mut u32,
-    cell: &mut u32,
-    cell_step: u32,
-    wrap: u32,
-    block_step: u64,
-) -> Option<u64> {
-    if *left > 0 {
-        *left -= 1;
-        *cell = cell.wrapping_add(cell_step);
-        None
-    } else {
-        *left = 3;
-        *cell ^= wrap;
-        Some(block_step)
-    }
-}
+/// The 2-bit fields of the x, y and z coordinates in a block's cell index.
+const X_FIELD: u32 = 0b00_00_11;
+const Y_FIELD: u32 = 0b00_11_00;
+const Z_FIELD: u32 = 0b11_00_00;
 
 /// The key of in-range voxel coordinates (the walk's ends are valid keys).
 fn key_of(k: [i32; 3]) -> VoxelKey {
@@ -724,3 +714,4 @@ mod tests {
         assert_eq!(map.log_odds(&v), -2.0);
     }
 }
+

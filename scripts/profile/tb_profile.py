@@ -13,8 +13,11 @@ addresses are then attributed with `llvm-addr2line -i` (inlined chains) to:
   every 64-bit integer to float conversion and `libm::sqrtf` is a library call.
 
 Usage: tb_profile.py LOG ELF [CRATE]   (LOG may be a FIFO; it is read once, streaming)
+With PROFILE_ADDRESSES=FILE set, also writes "address executions" per instruction to FILE
+(to put beside `llvm-objdump -d`).
 """
 import collections
+import os
 import re
 import subprocess
 import sys
@@ -106,6 +109,11 @@ def main():
             per_address[a] += n
     total = sum(per_address.values())
     print(f"instructions executed: {total:,}")
+    if os.environ.get("PROFILE_ADDRESSES"):
+        # Executions per instruction address, to annotate a disassembly with.
+        with open(os.environ["PROFILE_ADDRESSES"], "w") as out:
+            for a in sorted(per_address):
+                out.write(f"{a:x} {per_address[a]}\n")
     where = chains(elf, sorted(per_address))
     outer, inner, line = collections.Counter(), collections.Counter(), collections.Counter()
     for a, n in per_address.items():
