@@ -16,10 +16,10 @@ use crate::frame::Accumulator;
 use crate::frame::FrameState;
 #[cfg(doc)]
 use crate::key::VoxelKey;
+use crate::key::KEY_LIMIT;
 use crate::labels::{LabeledPoint, Labels};
 use crate::sqrt::sqrt;
 use crate::votes::{vote_hash, voting_classes};
-use crate::key::KEY_LIMIT;
 use crate::voxel::packed_offsets;
 
 /// Points per batch: large enough that the per-batch work vanishes, small enough for a

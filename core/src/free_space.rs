@@ -714,4 +714,3 @@ mod tests {
         assert_eq!(map.log_odds(&v), -2.0);
     }
 }
-

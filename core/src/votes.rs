@@ -160,13 +160,29 @@ impl<const C: usize> Voxel<C> {
     /// `votes` votes has room (done once per voxel per frame, before the votes, so the
     /// result does not depend on point order).
     pub(crate) fn make_vote_room(&mut self, votes: u8) {
-        let limit = 255 - votes;
-        if self.hist.iter().any(|&b| b > limit) {
+        if any_bin_above(&self.hist, 255 - votes) {
             for b in self.hist.iter_mut() {
                 *b /= 2;
             }
         }
     }
+}
+
+/// Whether a bin of `hist` is above `limit`, four bins at a time: `b > limit` exactly when
+/// `b + (255 - limit)` carries out of its byte, and the carries out of the four byte
+/// additions of two words come from their top bits and the carries into them (the sums
+/// of their low 7 bits, which cannot reach the next byte).
+fn any_bin_above(hist: &[u8], limit: u8) -> bool {
+    let v = u32::from_ne_bytes([255 - limit; 4]);
+    let low7 = 0x7f7f_7f7f;
+    let mut chunks = hist.chunks_exact(4);
+    let mut carries = 0;
+    for chunk in &mut chunks {
+        let a = <[u8; 4]>::try_from(chunk).map_or(0, u32::from_ne_bytes);
+        let into_top = (a & low7) + (v & low7);
+        carries |= (a & v) | ((a | v) & into_top);
+    }
+    carries & !low7 != 0 || chunks.remainder().iter().any(|&b| b > limit)
 }
 
 #[cfg(test)]
@@ -212,6 +228,27 @@ mod tests {
             let m = vote_max(e);
             for h in [0, 1, m.saturating_sub(1), m, m.wrapping_add(1), u32::MAX] {
                 assert_eq!(h <= m, takes_vote(h, e), "hash {h:#x}, exponent {e}");
+            }
+        }
+    }
+
+    #[test]
+    fn any_bin_above_is_any_greater_than() {
+        // Every limit, histograms of 1 to 11 bins (whole words and a remainder) with each
+        // bin in turn at the values around the limit, the others at 0 or 255 - 1.
+        for limit in 0..=255u8 {
+            for len in 1..=11 {
+                for at in 0..len {
+                    for value in [limit.saturating_sub(1), limit, limit.saturating_add(1), 255] {
+                        for rest in [0u8, limit.saturating_sub(1)] {
+                            let mut hist = [rest; 11];
+                            hist[at] = value;
+                            let hist = &hist[..len];
+                            let want = hist.iter().any(|&b| b > limit);
+                            assert_eq!(any_bin_above(hist, limit), want, "{hist:?} > {limit}");
+                        }
+                    }
+                }
             }
         }
     }
