@@ -42,6 +42,10 @@ pub(crate) const SLOW: u8 = 2;
 /// A pixel without a depth measurement (counted as `rejected_depth`).
 pub(crate) const NO_DEPTH: u8 = 3;
 
+/// Whether the accumulation takes points one by one (32-bit targets, see `sums.rs`) and
+/// packs them itself ([`Batch::packed`]); the conversion then leaves the 64-bit lanes.
+pub(crate) const PACK_PER_POINT: bool = cfg!(target_pointer_width = "32");
+
 /// One batch of points in structure-of-arrays form.
 pub(crate) struct Batch {
     pub(crate) len: usize,
@@ -376,7 +380,12 @@ impl Batch {
             };
         }
         // 64-bit lanes from here on (the loop above runs in 32-bit lanes, twice as many
-        // per vector instruction).
+        // per vector instruction). Targets that accumulate point by point (32-bit ones)
+        // pack each point as they add it instead (`Batch::packed`): storing the lanes and
+        // loading them again costs more there than it saves.
+        if PACK_PER_POINT {
+            return;
+        }
         for j in 0..BATCH {
             key[j] = ((key_x[j] as u64) << 32) | key_yz[j] as u64;
             let w = packed_offsets([offsets[0][j], offsets[1][j], offsets[2][j]]);
@@ -413,6 +422,17 @@ impl Batch {
                 }
             }
         }
+    }
+
+    /// The packed key and [`packed_offsets`] of point `j` (a `FAST` one), from the 32-bit
+    /// lanes: what the 64-bit lanes hold when the conversion fills them.
+    #[inline(always)]
+    pub(crate) fn packed(&self, j: usize) -> (u64, [u64; 3]) {
+        let (Some(&x), Some(&yz)) = (self.key_x.get(j), self.key_yz.get(j)) else {
+            return (0, [0; 3]);
+        };
+        let q = [0, 1, 2].map(|a| self.q[a].get(j).copied().unwrap_or(0));
+        (((x as u64) << 32) | yz as u64, packed_offsets(q))
     }
 
     /// The sensor point of point `j`.

@@ -20,7 +20,7 @@
 //! non-finite, several voting classes) goes through the scalar `Map::add_point`, which
 //! handles and counts every case, at its place in the batch.
 
-use crate::batch::{Batch, BAD_LABEL, BATCH, FAST, NO_DEPTH};
+use crate::batch::{Batch, BAD_LABEL, BATCH, FAST, NO_DEPTH, PACK_PER_POINT};
 #[cfg(doc)]
 use crate::frame::Accumulator;
 use crate::frame::{accumulator_index, FrameState};
@@ -44,7 +44,7 @@ fn next_pending(pending: &[u64; BATCH], j: usize) -> usize {
 
 /// Whether this target sums by voxel, or else by points (see the module documentation).
 const BY_VOXEL: bool = cfg!(target_feature = "avx2");
-const BY_POINTS: bool = cfg!(target_pointer_width = "32");
+const BY_POINTS: bool = PACK_PER_POINT;
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// The accumulation stage for a converted batch with its labels set; `labels(index)`
@@ -154,8 +154,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 self.other_point(f, batch, j, &labels);
                 continue;
             }
-            let (acc, slot, vote_key_max) = self.point_accumulator(f, batch.key[j]);
-            let w = [batch.w[0][j], batch.w[1][j], batch.w[2][j]];
+            let (key, w) = batch.packed(j);
+            let (acc, slot, vote_key_max) = self.point_accumulator(f, key);
             let votes = (batch.vote_key[j] <= vote_key_max) as u32;
             self.add_points(f, (acc, slot), (1, &w), (batch.vote[j], votes));
         }
