@@ -322,11 +322,9 @@ impl Batch {
         let from_depth = self.from_depth;
         let Batch {
             p,
-            key,
             key_x,
             key_yz,
             q: offsets,
-            w: sums,
             vote,
             vote_key,
             status,
@@ -379,13 +377,26 @@ impl Batch {
                 FAST
             };
         }
-        // 64-bit lanes from here on (the loop above runs in 32-bit lanes, twice as many
-        // per vector instruction). Targets that accumulate point by point (32-bit ones)
-        // pack each point as they add it instead (`Batch::packed`): storing the lanes and
-        // loading them again costs more there than it saves.
-        if PACK_PER_POINT {
-            return;
+        // Targets that accumulate point by point (32-bit ones) pack each point as they
+        // add it instead (`Batch::packed`): storing the lanes and loading them again
+        // costs more there than it saves.
+        if !PACK_PER_POINT {
+            self.fill_wide_lanes();
         }
+    }
+
+    /// The packed keys and [`packed_offsets`] of every lane, from the 32-bit lanes, in
+    /// 64-bit lanes (the conversion runs in 32-bit lanes, twice as many per vector
+    /// instruction).
+    fn fill_wide_lanes(&mut self) {
+        let Batch {
+            key,
+            key_x,
+            key_yz,
+            q: offsets,
+            w: sums,
+            ..
+        } = self;
         for j in 0..BATCH {
             key[j] = ((key_x[j] as u64) << 32) | key_yz[j] as u64;
             let w = packed_offsets([offsets[0][j], offsets[1][j], offsets[2][j]]);
