@@ -235,7 +235,7 @@ mod tests {
     #[test]
     fn any_bin_above_is_any_greater_than() {
         // Every limit, histograms of 1 to 11 bins (whole words and a remainder) with each
-        // bin in turn at the values around the limit, the others at 0 or 255 - 1.
+        // bin in turn at the values around the limit, the others at 0 or limit - 1.
         for limit in 0..=255u8 {
             for len in 1..=11 {
                 for at in 0..len {
