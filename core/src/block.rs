@@ -2,7 +2,7 @@
 //! free or occupied.
 //!
 //! Free space is most of an indoor map, so it is stored compactly: 64 `i16` log-odds in a
-//! block (184 bytes = 2.9 bytes per voxel incl. per-frame bookkeeping and the hash
+//! block (180 bytes = 2.8 bytes per voxel incl. per-frame bookkeeping and the hash
 //! index). A voxel's occupancy lives only here; the surface layer (NDT voxels) holds the
 //! Gaussian and the histogram, and a block's `surface` mask says which cells have one.
 
@@ -25,8 +25,6 @@ pub(crate) struct Block {
     /// Cells where a ray truncated at max range ended in the current frame.
     pub(crate) far: u64,
     pub(crate) chain: u32,
-    /// Head of hash bucket `slot` (see `table.rs`).
-    pub(crate) head: u32,
     /// Next block touched by points in this frame (`slot + 1`).
     pub(crate) frame_next: u32,
     pub(crate) key: [u16; 3],
@@ -42,7 +40,6 @@ impl Entry for Block {
         missed: 0,
         far: 0,
         chain: 0,
-        head: 0,
         frame_next: 0,
         key: [0; 3],
         stamp: 0,
@@ -56,12 +53,6 @@ impl Entry for Block {
     }
     fn set_chain(&mut self, next: u32) {
         self.chain = next;
-    }
-    fn head(&self) -> u32 {
-        self.head
-    }
-    fn set_head(&mut self, head: u32) {
-        self.head = head;
     }
 }
 

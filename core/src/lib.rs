@@ -10,7 +10,7 @@
 //!
 //! Two fixed-capacity hash tables with stable slots and deterministic eviction. The
 //! *occupancy layer* stores fixed-point log-odds of every observed voxel, free or occupied,
-//! in 4x4x4 blocks (`BLOCKS` capacity, 2.9 bytes per voxel); the *surface layer* stores NDT
+//! in 4x4x4 blocks (`BLOCKS` capacity, 2.8 bytes per voxel); the *surface layer* stores NDT
 //! voxels (`VOXELS` capacity, 96 bytes each with 40 classes): integer-quantised point sums
 //! `n, S1, S2` (exact, so the map does not depend on point order), which define a
 //! [`Gaussian`], and a `u8` class histogram. [`Map::BYTES`] is the exact `size_of` formula.
@@ -139,7 +139,9 @@ pub use free_space::voxels_on_segment;
 pub use gaussian::Gaussian;
 pub use key::{VoxelKey, KEY_LIMIT};
 pub use labels::{LabeledPoint, Labels, MAX_TOP_K};
-pub use map::{Map, MapStats, Occupancy, VoxelView, BLOCK_BYTES, MAP_HEADER_BYTES};
+pub use map::{
+    Map, MapStats, Occupancy, VoxelView, BLOCK_BYTES, BLOCK_TABLE_BYTES, MAP_HEADER_BYTES,
+};
 pub use nalgebra::{Isometry3, Matrix3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
 pub use raycast::RayHit;
 pub use render::INVALID_LABEL;

@@ -10,11 +10,20 @@ use crate::key::VoxelKey;
 use crate::table::{Entry, Table};
 use crate::voxel::{argmax, Voxel};
 
-/// Bytes of one occupancy block (64 voxels) in the block table, hash index included.
-pub const BLOCK_BYTES: usize = core::mem::size_of::<Block>();
+/// Bytes of one occupancy block (64 voxels) in the block table, hash index (a 4-byte
+/// bucket head per slot) included.
+pub const BLOCK_BYTES: usize = core::mem::size_of::<Block>() + BUCKET_HEAD_BYTES;
 
-/// Bytes of the map besides its two tables (config, counters, table bookkeeping).
-pub const MAP_HEADER_BYTES: usize = 128;
+/// Bytes of a table's bucket head, one per slot (`table.rs`).
+const BUCKET_HEAD_BYTES: usize = core::mem::size_of::<u32>();
+
+/// Bytes of the map besides its two tables' slots and heads: config, counters and the
+/// voxel table's bookkeeping (the block table's is [`BLOCK_TABLE_BYTES`]).
+pub const MAP_HEADER_BYTES: usize = 112;
+
+/// Bytes of the block table's bookkeeping; the table is 8-byte aligned, so it takes
+/// `round_up(BLOCK_TABLE_BYTES + B * BLOCK_BYTES, 8)` bytes.
+pub const BLOCK_TABLE_BYTES: usize = 12;
 
 /// Occupancy state of a voxel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -109,13 +118,17 @@ pub struct Map<const VOXELS: usize, const BLOCKS: usize, const CLASSES: usize> {
 }
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
-    /// Bytes per NDT voxel, hash index included: `round_up(54 + C, 4)` (96 for 40 classes).
-    pub const VOXEL_BYTES: usize = core::mem::size_of::<Voxel<C>>();
+    /// Bytes per NDT voxel, hash index (a 4-byte bucket head per slot) included:
+    /// `round_up(52 + C, 4) + 4` (96 for 40 classes).
+    pub const VOXEL_BYTES: usize = core::mem::size_of::<Voxel<C>>() + BUCKET_HEAD_BYTES;
 
-    /// Exact size of the map:
-    /// `round_up(MAP_HEADER_BYTES + V * VOXEL_BYTES + B * BLOCK_BYTES, 8)`.
-    pub const BYTES: usize =
-        (MAP_HEADER_BYTES + V * Self::VOXEL_BYTES + B * BLOCK_BYTES).div_ceil(8) * 8;
+    /// Exact size of the map: `round_up(MAP_HEADER_BYTES + V * VOXEL_BYTES +
+    /// round_up(BLOCK_TABLE_BYTES + B * BLOCK_BYTES, 8), 8)`.
+    pub const BYTES: usize = (MAP_HEADER_BYTES
+        + V * Self::VOXEL_BYTES
+        + (BLOCK_TABLE_BYTES + B * BLOCK_BYTES).div_ceil(8) * 8)
+        .div_ceil(8)
+        * 8;
 
     /// An empty map with `config` as given (callers check it).
     const fn empty(config: Config) -> Self {
@@ -345,8 +358,10 @@ mod tests {
     use std::vec::Vec;
 
     fn check_size<const V: usize, const B: usize, const C: usize>() {
-        let voxel = (56 + C).div_ceil(4) * 4;
-        let bytes = (128 + V * voxel + B * 184).div_ceil(8) * 8;
+        // A voxel slot (52 bytes + C, 4-aligned) and its bucket head; a block slot (176
+        // bytes) and its bucket head.
+        let voxel = (52 + C).div_ceil(4) * 4 + 4;
+        let bytes = (112 + V * voxel + (12 + B * 180).div_ceil(8) * 8).div_ceil(8) * 8;
         assert_eq!(Map::<V, B, C>::VOXEL_BYTES, voxel, "VOXEL_BYTES C={C}");
         assert_eq!(
             Map::<V, B, C>::BYTES,
@@ -390,10 +405,13 @@ mod tests {
         sizes_b!(1, 2, 3, 7, 10, 64, 1000);
         assert_eq!(Map::<4096, 1024, 40>::VOXEL_BYTES, 96);
         assert_eq!(Map::<1, 1, 40>::VOXEL_BYTES, 96);
-        assert_eq!(BLOCK_BYTES, 184);
-        assert_eq!(MAP_HEADER_BYTES, 128);
-        assert_eq!(core::mem::size_of::<Block>(), 184);
-        assert_eq!(Map::<1, 1, 1>::BYTES, 376); // 128 + 60 + 184 = 372 -> 376
+        assert_eq!(BLOCK_BYTES, 180);
+        assert_eq!(MAP_HEADER_BYTES, 112);
+        assert_eq!(BLOCK_TABLE_BYTES, 12);
+        assert_eq!(core::mem::size_of::<Block>(), 176);
+        assert_eq!(core::mem::size_of::<Voxel<40>>(), 92);
+        assert_eq!(Map::<1, 1, 1>::BYTES, 368); // 112 + (56 + 4) + (12 + 176 + 4) = 364 -> 368
+        assert_eq!(Map::<1, 2, 1>::BYTES, 552); // 112 + 60 + (12 + 2 * 180 = 372 -> 376) = 548 -> 552
     }
 
     /// Regression: `Map::new` promises to replace invalid configs by the default, but `checked()` only

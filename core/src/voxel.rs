@@ -24,8 +24,6 @@ pub(crate) struct Voxel<const C: usize> {
     /// Point count; 0 only for an empty slot.
     pub(crate) n: u32,
     pub(crate) chain: u32,
-    /// Head of hash bucket `slot` (see `table.rs`).
-    pub(crate) head: u32,
     /// Packed key split in three `u16` (keeps the struct 4-byte aligned).
     pub(crate) key: [u16; 3],
     /// Vote sampling: bits 12..16 hold the exponent `k` (this frame's sample keeps one
@@ -42,7 +40,6 @@ impl<const C: usize> Entry for Voxel<C> {
         s1: [0; 3],
         n: 0,
         chain: 0,
-        head: 0,
         key: [0; 3],
         tally: 0,
         hist: [0; C],
@@ -55,12 +52,6 @@ impl<const C: usize> Entry for Voxel<C> {
     }
     fn set_chain(&mut self, next: u32) {
         self.chain = next;
-    }
-    fn head(&self) -> u32 {
-        self.head
-    }
-    fn set_head(&mut self, head: u32) {
-        self.head = head;
     }
 }
 

@@ -49,7 +49,7 @@ pub fn run(a: &BudgetArgs) -> Result<()> {
 /// use sndt_host::cli::budget::{budget, BudgetArgs};
 /// let mut a = BudgetArgs { cell: 0.1, classes: 40, capacity: 4096, blocks: Some(512),
 ///                          dataset: None, split: None, stride: 1 };
-/// assert!(budget(&a).unwrap().contains("= 487552 bytes"));
+/// assert!(budget(&a).unwrap().contains("= 485504 bytes"));
 /// a.classes = 0;
 /// assert!(budget(&a).is_err());
 /// ```

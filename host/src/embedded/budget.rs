@@ -11,11 +11,12 @@
 use crate::dataset::frame::{Frame, LabelSource};
 use anyhow::{bail, Result};
 use sndt_core::{
-    Config, Map, BLOCK_BYTES, MAP_HEADER_BYTES, SNAPSHOT_BLOCK_BYTES, SNAPSHOT_HEADER_BYTES,
+    Config, Map, BLOCK_BYTES, BLOCK_TABLE_BYTES, MAP_HEADER_BYTES, SNAPSHOT_BLOCK_BYTES,
+    SNAPSHOT_HEADER_BYTES,
 };
 
 /// Fixed bytes of a surface voxel before its `C`-byte class histogram (sums, count, key,
-/// hash links, vote sampling); the voxel is `round_up(VOXEL_FIXED_BYTES + C, 4)` bytes
+/// hash links and bucket head, vote sampling); the voxel is `round_up(VOXEL_FIXED_BYTES + C, 4)` bytes
 /// (`Map::<V, B, C>::VOXEL_BYTES`; tests check the two agree).
 pub const VOXEL_FIXED_BYTES: usize = 56;
 
@@ -29,9 +30,15 @@ pub fn voxel_bytes(classes: usize) -> usize {
 }
 
 /// Exact bytes of `Map<voxels, blocks, classes>` (`Map::BYTES`, its `size_of`):
-/// `round_up(MAP_HEADER_BYTES + voxels * voxel_bytes(classes) + blocks * BLOCK_BYTES, 8)`.
+/// `round_up(MAP_HEADER_BYTES + voxels * voxel_bytes(classes) + block_table_bytes(blocks), 8)`.
 pub fn map_bytes(voxels: usize, blocks: usize, classes: usize) -> usize {
-    (MAP_HEADER_BYTES + voxels * voxel_bytes(classes) + blocks * BLOCK_BYTES).div_ceil(8) * 8
+    (MAP_HEADER_BYTES + voxels * voxel_bytes(classes) + block_table_bytes(blocks)).div_ceil(8) * 8
+}
+
+/// Bytes of the block table (8-byte aligned):
+/// `round_up(BLOCK_TABLE_BYTES + blocks * BLOCK_BYTES, 8)`.
+pub fn block_table_bytes(blocks: usize) -> usize {
+    (BLOCK_TABLE_BYTES + blocks * BLOCK_BYTES).div_ceil(8) * 8
 }
 
 /// Bytes of the largest snapshot of such a map (every voxel and block in use): the buffer
@@ -61,7 +68,7 @@ pub fn report(cell: f32, classes: usize, voxels: usize, blocks: usize) -> String
     );
     s += &format!("  header           MAP_HEADER_BYTES = {MAP_HEADER_BYTES} bytes\n");
     s += &format!(
-        "  total            round_up({MAP_HEADER_BYTES} + {voxels} x {vb} + {blocks} x {BLOCK_BYTES}, 8) = {total} bytes ({:.1} KiB)\n",
+        "  total            round_up({MAP_HEADER_BYTES} + {voxels} x {vb} + round_up({BLOCK_TABLE_BYTES} + {blocks} x {BLOCK_BYTES}, 8), 8) = {total} bytes ({:.1} KiB)\n",
         kib(total)
     );
     s += &format!(
@@ -295,7 +302,7 @@ mod tests {
         assert_eq!(pick_capacity(1, 9000), Some((262_144, 32_768)));
         assert_eq!(pick_capacity((1 << 20) + 1, 1), None);
         let r = report(0.1, 40, 4096, 512);
-        assert!(r.contains("= 487552 bytes"), "{r}");
+        assert!(r.contains("= 485504 bytes"), "{r}");
     }
 
     #[test]

@@ -26,9 +26,10 @@
 #define SNDT_CLASSES 40
 #endif
 #define SNDT_ROUND_UP_(x, a) ((((x) + (a) - 1) / (a)) * (a))
-/* Bytes of a map: an 8-byte tag, a 128-byte header, per surface voxel round_up(56 +
- * classes, 4) bytes, per occupancy block 184 bytes, rounded up to 8. */
-#define SNDT_MAP_BYTES (8 + SNDT_ROUND_UP_(128 + (size_t)SNDT_VOXELS * SNDT_ROUND_UP_(56 + SNDT_CLASSES, 4) + (size_t)SNDT_BLOCKS * 184, 8))
+/* Bytes of a map: an 8-byte tag, then, rounded up to 8: a 112-byte header, per surface
+ * voxel round_up(56 + classes, 4) bytes, and the block table (12 bytes and 180 per
+ * occupancy block, rounded up to 8). */
+#define SNDT_MAP_BYTES (8 + SNDT_ROUND_UP_(112 + (size_t)SNDT_VOXELS * SNDT_ROUND_UP_(56 + SNDT_CLASSES, 4) + SNDT_ROUND_UP_(12 + (size_t)SNDT_BLOCKS * 180, 8), 8))
 /* Alignment of a map's storage. */
 #define SNDT_MAP_ALIGN 8
 /* Most bytes a snapshot of a full map takes (sndt_snapshot_len gives the current size). */

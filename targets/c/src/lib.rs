@@ -43,7 +43,7 @@ use core::mem::{align_of, size_of};
 use core::ptr;
 use sndt_core::{
     Depth, DepthImage, DepthKind, LabelImage, LabeledPoint, Labels, Map, Occupancy, Point3,
-    Vector3, MAP_HEADER_BYTES,
+    Vector3, BLOCK_TABLE_BYTES, MAP_HEADER_BYTES,
 };
 use types::sndt_status::*;
 
@@ -73,13 +73,14 @@ pub const MAP_ALIGN: usize = align_of::<Storage>();
 /// The header's formula for `SNDT_MAP_BYTES`, from the capacities alone.
 pub const fn header_map_bytes(voxels: usize, blocks: usize, classes: usize) -> usize {
     let voxel = (56 + classes).div_ceil(4) * 4;
-    8 + (MAP_HEADER_BYTES + voxels * voxel + blocks * sndt_core::BLOCK_BYTES).div_ceil(8) * 8
+    let block_table = (BLOCK_TABLE_BYTES + blocks * sndt_core::BLOCK_BYTES).div_ceil(8) * 8;
+    8 + (MAP_HEADER_BYTES + voxels * voxel + block_table).div_ceil(8) * 8
 }
 
 const _: () = {
     assert!(MAP_BYTES == header_map_bytes(VOXELS, BLOCKS, CLASSES));
     assert!(MAP_ALIGN == 8);
-    assert!(MAP_HEADER_BYTES == 128 && sndt_core::BLOCK_BYTES == 184);
+    assert!(MAP_HEADER_BYTES == 112 && BLOCK_TABLE_BYTES == 12 && sndt_core::BLOCK_BYTES == 180);
 };
 
 /// Opaque handle of a map: the caller's storage after `sndt_map_init`.
@@ -773,7 +774,7 @@ mod tests {
             storage_bytes::<100, 7, 254>()
         );
         assert_eq!(header_map_bytes(33, 65, 3), storage_bytes::<33, 65, 3>());
-        assert_eq!(MAP_BYTES, 487_560);
+        assert_eq!(MAP_BYTES, 485_512);
     }
 
     #[test]
