@@ -10,7 +10,7 @@
 //! The heads have their own array because a lookup starts at a random bucket: in a
 //! compact array of 4-byte heads (2 MiB for a host map of 2^19 voxels) that first read
 //! hits the cache far more often than a head stored inside a 96-byte slot of a 50 MB
-//! array. The update at 5 cm was about 9 % faster that way (`cargo bench --bench update`).
+//! array. The update at 5 cm was 7-9 % faster that way (`cargo bench --bench update`).
 //!
 //! Why not `heapless::IndexMap`: it removes by moving the last entry into the hole, so slot
 //! indices (held by blocks, caches and the frame list) would move, and it iterates in
