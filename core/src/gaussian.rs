@@ -73,11 +73,11 @@ impl Gaussian {
     /// for a degenerate voxel whose points coincide).
     pub(crate) fn prepare(&self, ratio: f32, floor_abs: f32) -> Prepared {
         let (vals, vecs) = symmetric_eigen(&self.covariance);
-        let lmax = vals[0].max(vals[1]).max(vals[2]);
-        let floor = (lmax * ratio).max(floor_abs);
+        let lmax = max_f32(max_f32(vals[0], vals[1]), vals[2]);
+        let floor = max_f32(lmax * ratio, floor_abs);
         let mut inv = Matrix3::zeros();
         for (i, val) in vals.iter().enumerate() {
-            let l = val.max(floor);
+            let l = max_f32(*val, floor);
             let v = vecs.column(i);
             inv += v * v.transpose() * (1.0 / l);
         }
@@ -85,6 +85,18 @@ impl Gaussian {
             mean: self.mean,
             inv,
         }
+    }
+}
+
+/// `x.max(y)` as `libm::fmaxf` computes it: `y` when `x` is NaN or smaller, else `x`.
+/// `f32::max` is a library call on a Cortex-M4 (its FPU has no max instruction); this is
+/// two comparisons inline.
+#[inline(always)]
+fn max_f32(x: f32, y: f32) -> f32 {
+    if x.is_nan() || x < y {
+        y
+    } else {
+        x
     }
 }
 
@@ -152,6 +164,38 @@ fn jacobi_rotate<const P: usize, const Q: usize>(a: &mut Matrix3<f32>, v: &mut M
 mod tests {
     use super::*;
     use crate::testutil::*;
+
+    /// `max_f32` is `libm::fmaxf` (what `f32::max` called in firmware builds) bit for
+    /// bit on every pair of special and ordinary values with at most one NaN, signed
+    /// zeros included.
+    #[test]
+    fn max_f32_is_fmaxf() {
+        let values = [
+            0.0f32,
+            -0.0,
+            1e-45,
+            -1e-45,
+            1.0,
+            -1.0,
+            2.5e-7,
+            3.4e38,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        for &x in &values {
+            for &y in &values {
+                if x.is_nan() && y.is_nan() {
+                    continue;
+                }
+                assert_eq!(
+                    max_f32(x, y).to_bits(),
+                    libm::fmaxf(x, y).to_bits(),
+                    "max({x}, {y})"
+                );
+            }
+        }
+    }
 
     /// Rotation matrix (f64) about a unit axis by `angle`.
     fn rotation(axis: [f64; 3], angle: f64) -> [[f64; 3]; 3] {
