@@ -458,7 +458,33 @@ fn lanes(p: &mut [f32; BATCH], start: usize, end: usize) -> &mut [f32] {
 }
 
 /// `floor(t)` and whether `t - floor(t) >= 0.5` (the scalar path's `floor_i32` and
-/// half-up rounding of the offset) for `|t| < 2^22`, in operations that vectorise and
+/// half-up rounding of the offset) for `|t| < 2^22`: [`floor_and_half_by_magic`] where
+/// the conversion is vectorised, [`floor_and_half_by_trunc`] on 32-bit targets. Both
+/// give the same values on that range (a test checks them against `floor_i32`).
+#[inline(always)]
+fn floor_and_half(t: f32) -> (i32, bool) {
+    if PACK_PER_POINT {
+        floor_and_half_by_trunc(t)
+    } else {
+        floor_and_half_by_magic(t)
+    }
+}
+
+/// [`floor_and_half`] from `floor(2t)`, whose high bits are `floor(t)` and whose lowest
+/// bit is the half: `2t` is exact, and its conversion to `i32` truncates towards zero,
+/// which is one instruction on a Cortex-M4 (whose conversion saturates, as Rust's `as`
+/// does). Truncation is `floor` unless `2t` is negative with a fraction; then the
+/// truncated value, converted back exactly (it is below `2^23`), is above `2t`. Other
+/// inputs give unspecified values.
+#[inline]
+fn floor_and_half_by_trunc(t: f32) -> (i32, bool) {
+    let t2 = t * 2.0;
+    let truncated = t2 as i32;
+    let floor2 = truncated.wrapping_sub((truncated as f32 > t2) as i32);
+    (floor2 >> 1, floor2 & 1 != 0)
+}
+
+/// [`floor_and_half`] in operations that vectorise and
 /// need one float-to-integer transfer: adding `1.5 * 2^23` rounds `t` to the nearest
 /// integer `n` (ties to even), which the float's low mantissa bits then hold, and
 /// subtracting it again gives `n` as a float exactly. `d = t - n` is exact and in
@@ -467,7 +493,7 @@ fn lanes(p: &mut [f32; BATCH], start: usize, end: usize) -> &mut [f32] {
 /// not `FAST`: the key range in quanta is within `2^21` plus max range, at most 4,096
 /// cells of at most 64 quanta, `Config::MAX_RAY_CELLS`).
 #[inline]
-fn floor_and_half(t: f32) -> (i32, bool) {
+fn floor_and_half_by_magic(t: f32) -> (i32, bool) {
     const MAGIC: f32 = 12_582_912.0; // 1.5 * 2^23
     let s = t + MAGIC;
     let nearest = (s.to_bits() as i32).wrapping_sub(MAGIC.to_bits() as i32);
@@ -513,7 +539,9 @@ mod tests {
         .take(200_000);
         for t in edge.into_iter().chain(sweep) {
             let m = floor_i32(t);
-            assert_eq!(floor_and_half(t), (m, (t - m as f32) >= 0.5), "t = {t:e}");
+            let want = (m, (t - m as f32) >= 0.5);
+            assert_eq!(floor_and_half_by_magic(t), want, "magic, t = {t:e}");
+            assert_eq!(floor_and_half_by_trunc(t), want, "trunc, t = {t:e}");
         }
     }
 }
