@@ -205,11 +205,10 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         (block, cell): (u64, u32),
         last: bool,
     ) -> Option<u64> {
-        let voxel = VoxelKey::from_block_cell(block, cell);
-        if last && !seg.include_end && voxel == key_of(seg.end) {
+        if last && !seg.include_end && VoxelKey::from_block_cell(block, cell) == key_of(seg.end) {
             return None;
         }
-        Some(self.visit(f, cache, &seg.ray, at, voxel))
+        Some(self.visit(f, cache, &seg.ray, at, (block, cell)))
     }
 
     /// [`Map::walk`] for a segment that may leave the key range: the voxel-by-voxel
@@ -226,18 +225,19 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 let Some(voxel) = VoxelKey::from_ints(k[0], k[1], k[2]) else {
                     return false;
                 };
-                let (at, missed) = self.enter_block(f, voxel.block());
-                if !has_cell(missed, voxel.cell()) {
-                    self.visit(f, cache, &seg.ray, at, voxel);
+                let (block, cell) = (voxel.block(), voxel.cell());
+                let (at, missed) = self.enter_block(f, block);
+                if !has_cell(missed, cell) {
+                    self.visit(f, cache, &seg.ray, at, (block, cell));
                 }
                 true
             },
         );
     }
 
-    /// A traversed voxel without its miss yet this frame, in block slot `at` (`None`:
-    /// the map had no room for its block, the miss is dropped): gives it the miss and
-    /// returns the block's new `missed` mask.
+    /// A traversed voxel without its miss yet this frame, cell `cell` of the block with
+    /// packed key `block`, in block slot `at` (`None`: the map had no room for the block,
+    /// the miss is dropped): gives it the miss and returns the block's new `missed` mask.
     #[inline(always)]
     fn visit(
         &mut self,
@@ -245,11 +245,11 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         cache: &mut GaussCache,
         ray: &Ray,
         at: Option<usize>,
-        voxel: VoxelKey,
+        (block, cell): (u64, u32),
     ) -> u64 {
         match at {
             Some(bs) => {
-                self.miss(f, cache, ray, &voxel, bs);
+                self.miss(f, cache, ray, (block, cell), bs);
                 self.blocks.get(bs).map_or(0, |b| b.missed)
             }
             None => {
@@ -271,25 +271,28 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         (at, missed)
     }
 
-    /// The miss of `voxel` (its block in slot `bs`, without a miss yet this
-    /// frame) for `ray`.
+    /// The miss of cell `cell` of the block with packed key `block` (in slot `bs`,
+    /// without a miss yet this frame) for `ray`. The voxel's key is built only when its
+    /// Gaussian is needed.
     #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn miss(
         &mut self,
         f: &mut FrameState,
         cache: &mut GaussCache,
         ray: &Ray,
-        voxel: &VoxelKey,
+        (block, cell): (u64, u32),
         bs: usize,
     ) {
-        let bit = 1u64 << voxel.cell();
+        let bit = 1u64 << (cell & 63);
         let cfg = &self.config;
         let mut delta = f.miss;
         let Some(surface) = self.blocks.get(bs).map(|b| b.surface) else {
             return;
         };
         if surface & bit != 0 && cfg.miss_model == MissModel::NdtOm {
-            let found = self.voxels.find(voxel.packed());
+            let found = self
+                .voxels
+                .find(VoxelKey::from_block_cell(block, cell).packed());
             if let Some((vs, v)) = found.and_then(|vs| Some((vs, self.voxels.get(vs)?))) {
                 if v.n >= cfg.n_min {
                     let g = cache.get(vs, || v.prepared(cfg));
@@ -303,7 +306,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let (lo, hi) = f.clamp;
         if let Some(b) = self.blocks.get_mut(bs) {
             b.missed |= bit;
-            b.add_logodds(voxel.cell(), delta, lo, hi);
+            b.add_logodds(cell, delta, lo, hi);
         }
     }
 }
