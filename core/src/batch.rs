@@ -484,14 +484,14 @@ fn floor_and_half_by_trunc(t: f32) -> (i32, bool) {
     (floor2 >> 1, floor2 & 1 != 0)
 }
 
-/// [`floor_and_half`] in operations that vectorise and
-/// need one float-to-integer transfer: adding `1.5 * 2^23` rounds `t` to the nearest
-/// integer `n` (ties to even), which the float's low mantissa bits then hold, and
-/// subtracting it again gives `n` as a float exactly. `d = t - n` is exact and in
-/// `[-0.5, 0.5]`: `floor(t)` is `n - 1` when `d < 0`, and `t - floor(t)` is `d + 1`
-/// (at least 0.5) then, else `d`. Other inputs give unspecified values (such points are
-/// not `FAST`: the key range in quanta is within `2^21` plus max range, at most 4,096
-/// cells of at most 64 quanta, `Config::MAX_RAY_CELLS`).
+/// [`floor_and_half`] in operations that vectorise and need one float-to-integer
+/// transfer: adding `1.5 * 2^23` rounds `t` to the nearest integer `n` (ties to even),
+/// which the float's low mantissa bits then hold, and subtracting it again gives `n` as
+/// a float exactly. `d = t - n` is exact and in `[-0.5, 0.5]`: `floor(t)` is `n - 1`
+/// when `d < 0`, and `t - floor(t)` is `d + 1` (at least 0.5) then, else `d`. Other
+/// inputs give unspecified values (such points are not `FAST`: the key range in quanta
+/// is within `2^21` plus max range, at most 4,096 cells of at most 64 quanta,
+/// `Config::MAX_RAY_CELLS`).
 #[inline]
 fn floor_and_half_by_magic(t: f32) -> (i32, bool) {
     const MAGIC: f32 = 12_582_912.0; // 1.5 * 2^23
