@@ -540,6 +540,41 @@ fn a_record_claiming_a_huge_length_is_an_error_not_an_abort() {
     assert!(format!("{e:#}").contains("truncated or corrupt"), "{e:#}");
 }
 
+/// Regression (found by the fuzzing smoke of the test command; the input is in the mcap
+/// corpus): a record inside an uncompressed chunk, longer than what is left of the chunk,
+/// made the mcap crate's reader underflow its count of the chunk's bytes (a panic with
+/// overflow checks); the reader now refuses the bag with an error.
+#[test]
+fn a_chunk_record_longer_than_its_chunk_is_an_error_not_a_panic() {
+    let fuzzed = include_bytes!("../../fuzz/corpus/mcap/crash-chunk-record-overflow");
+    // The same by hand: an uncompressed chunk of 20 record bytes whose first record
+    // claims 100, with enough bytes after the chunk for the claim to be read.
+    let mut built = b"\x89MCAP0\r\n".to_vec();
+    let mut chunk = Vec::new();
+    chunk.extend_from_slice(&[0u8; 8 + 8]); // message start and end times
+    chunk.extend_from_slice(&20u64.to_le_bytes()); // uncompressed size
+    chunk.extend_from_slice(&0u32.to_le_bytes()); // CRC (none)
+    chunk.extend_from_slice(&0u32.to_le_bytes()); // compression "": uncompressed
+    chunk.extend_from_slice(&20u64.to_le_bytes()); // records' length
+    chunk.push(0x05); // a message record ...
+    chunk.extend_from_slice(&100u64.to_le_bytes()); // ... of 100 bytes
+    chunk.extend_from_slice(&[0u8; 11]);
+    built.push(0x06);
+    built.extend_from_slice(&(chunk.len() as u64).to_le_bytes());
+    built.extend_from_slice(&chunk);
+    built.extend_from_slice(&[0u8; 200]);
+    for (name, bytes) in [("fuzzed", &fuzzed[..]), ("built", &built[..])] {
+        let path = temp("chunk-overflow").join("bag.mcap");
+        let e = Bag::from_bytes(&path, bytes.to_vec(), &BagOptions::default())
+            .err()
+            .unwrap_or_else(|| panic!("{name}: a chunk record past its chunk must be refused"));
+        assert!(
+            format!("{e:#}").contains("truncated or corrupt"),
+            "{name}: {e:#}"
+        );
+    }
+}
+
 /// Regression (found by `fuzz/fuzz_targets/mcap.rs`; the input is in its corpus): a
 /// transform chain whose pose is not finite as f32 (or not a rotation) gave a frame that
 /// `Frame::validate` refuses and the core would refuse while mapping; the reader now

@@ -97,8 +97,76 @@ fn check_record_lengths(bytes: &[u8]) -> Result<()> {
     Ok(())
 }
 
+/// Refuses an uncompressed chunk holding a record longer than what is left of the chunk.
+/// The mcap crate (0.26) subtracts each such record's length from the chunk's remaining
+/// bytes without checking, which underflows (a panic with overflow checks, as in debug
+/// and fuzzing builds; garbage records without). Walks the top-level records as the
+/// crate does; anything else malformed is left to the crate, which reports it.
+fn check_uncompressed_chunks(bytes: &[u8]) -> Result<()> {
+    const MAGIC_LEN: usize = 8;
+    const CHUNK: u8 = 0x06;
+    let u64_at = |at: usize| -> Option<u64> {
+        Some(u64::from_le_bytes(
+            bytes.get(at..at.checked_add(8)?)?.try_into().ok()?,
+        ))
+    };
+    let u32_at = |at: usize| -> Option<usize> {
+        Some(u32::from_le_bytes(bytes.get(at..at.checked_add(4)?)?.try_into().ok()?) as usize)
+    };
+    let mut at = MAGIC_LEN;
+    while at < bytes.len() {
+        let (Some(&opcode), Some(len)) = (bytes.get(at), u64_at(at + 1)) else {
+            return Ok(());
+        };
+        let body = at + 9;
+        if opcode == CHUNK {
+            // Start and end times, uncompressed size and CRC, then the compression name
+            // and the records' length.
+            let Some(name_len) = u32_at(body + 28) else {
+                return Ok(());
+            };
+            let name_end = body + 32 + name_len;
+            let (Some(name), Some(records_len)) =
+                (bytes.get(body + 32..name_end), u64_at(name_end))
+            else {
+                return Ok(());
+            };
+            if name.is_empty() {
+                check_chunk_records(bytes, name_end + 8, records_len)?;
+            }
+        }
+        let Some(next) = usize::try_from(len).ok().and_then(|l| body.checked_add(l)) else {
+            return Ok(());
+        };
+        at = next;
+    }
+    Ok(())
+}
+
+/// The records of an uncompressed chunk, `remaining` bytes from `at`: each must fit.
+fn check_chunk_records(bytes: &[u8], mut at: usize, mut remaining: u64) -> Result<()> {
+    while remaining > 0 {
+        let Some(len) = at
+            .checked_add(9)
+            .and_then(|end| bytes.get(at + 1..end))
+            .and_then(|b| b.try_into().ok())
+            .map(u64::from_le_bytes)
+        else {
+            return Ok(()); // truncated: the crate reports it
+        };
+        let record = len.saturating_add(9);
+        if record > remaining {
+            bail!("reading the MCAP file (truncated or corrupt?): a record of {record} bytes in a chunk with {remaining} bytes left");
+        }
+        remaining -= record;
+        at = at.saturating_add(record as usize);
+    }
+    Ok(())
+}
+
 /// Every CDR message of the bag.
 fn messages(bytes: &[u8]) -> Result<Vec<RawMessage>> {
+    check_uncompressed_chunks(bytes)?;
     check_record_lengths(bytes)?;
     let mut out = Vec::new();
     for m in mcap::MessageStream::new(bytes).context("not an MCAP file")? {
