@@ -105,29 +105,21 @@ fn check_record_lengths(bytes: &[u8]) -> Result<()> {
 fn check_uncompressed_chunks(bytes: &[u8]) -> Result<()> {
     const MAGIC_LEN: usize = 8;
     const CHUNK: u8 = 0x06;
-    let u64_at = |at: usize| -> Option<u64> {
-        Some(u64::from_le_bytes(
-            bytes.get(at..at.checked_add(8)?)?.try_into().ok()?,
-        ))
-    };
-    let u32_at = |at: usize| -> Option<usize> {
-        Some(u32::from_le_bytes(bytes.get(at..at.checked_add(4)?)?.try_into().ok()?) as usize)
-    };
     let mut at = MAGIC_LEN;
     while at < bytes.len() {
-        let (Some(&opcode), Some(len)) = (bytes.get(at), u64_at(at + 1)) else {
+        let (Some(&opcode), Some(len)) = (bytes.get(at), le_u64(bytes, at + 1)) else {
             return Ok(());
         };
         let body = at + 9;
         if opcode == CHUNK {
             // Start and end times, uncompressed size and CRC, then the compression name
             // and the records' length.
-            let Some(name_len) = u32_at(body + 28) else {
+            let Some(name_len) = le_bytes::<4>(bytes, body + 28).map(u32::from_le_bytes) else {
                 return Ok(());
             };
-            let name_end = body + 32 + name_len;
+            let name_end = body + 32 + name_len as usize;
             let (Some(name), Some(records_len)) =
-                (bytes.get(body + 32..name_end), u64_at(name_end))
+                (bytes.get(body + 32..name_end), le_u64(bytes, name_end))
             else {
                 return Ok(());
             };
@@ -146,12 +138,7 @@ fn check_uncompressed_chunks(bytes: &[u8]) -> Result<()> {
 /// The records of an uncompressed chunk, `remaining` bytes from `at`: each must fit.
 fn check_chunk_records(bytes: &[u8], mut at: usize, mut remaining: u64) -> Result<()> {
     while remaining > 0 {
-        let Some(len) = at
-            .checked_add(9)
-            .and_then(|end| bytes.get(at + 1..end))
-            .and_then(|b| b.try_into().ok())
-            .map(u64::from_le_bytes)
-        else {
+        let Some(len) = at.checked_add(1).and_then(|l| le_u64(bytes, l)) else {
             return Ok(()); // truncated: the crate reports it
         };
         let record = len.saturating_add(9);
@@ -159,9 +146,19 @@ fn check_chunk_records(bytes: &[u8], mut at: usize, mut remaining: u64) -> Resul
             bail!("reading the MCAP file (truncated or corrupt?): a record of {record} bytes in a chunk with {remaining} bytes left");
         }
         remaining -= record;
-        at = at.saturating_add(record as usize);
+        at = at.saturating_add(usize::try_from(record).unwrap_or(usize::MAX));
     }
     Ok(())
+}
+
+/// The `N` bytes at `at`, if the input has them.
+fn le_bytes<const N: usize>(bytes: &[u8], at: usize) -> Option<[u8; N]> {
+    bytes.get(at..at.checked_add(N)?)?.try_into().ok()
+}
+
+/// The little-endian `u64` at `at`, if the input has it.
+fn le_u64(bytes: &[u8], at: usize) -> Option<u64> {
+    le_bytes::<8>(bytes, at).map(u64::from_le_bytes)
 }
 
 /// Every CDR message of the bag.
