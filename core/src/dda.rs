@@ -62,3 +62,198 @@ impl Dda {
         self.step[a]
     }
 }
+
+/// Walks traversed together by [`lane_keys`]: eight, as many as one AVX-512 register
+/// holds `f32`s (AVX2 machines take two registers and still gain).
+pub(crate) const LANES: usize = 8;
+
+/// The most steps [`lane_keys`] records per walk; longer walks go step by step. None on
+/// 32-bit targets, which walk step by step (see `free_space.rs`) and have little stack.
+pub(crate) const LANE_STEPS: usize = if cfg!(target_pointer_width = "64") {
+    256
+} else {
+    0
+};
+
+/// The voxels of up to [`LANES`] walks: `keys[n][l]` is the packed key (16-bit fields,
+/// x highest, each offset by 2^15) of the voxel walk `l` is in after `n` steps, for `n`
+/// up to the returned step count of the walk, each step's axis chosen as
+/// [`Dda::next_axis`] chooses it (the lowest axis on ties). A walk stops after `limit[l]`
+/// steps (at most [`LANE_STEPS`]), or before a step whose boundary lies beyond
+/// `t = t_end`. `start[l]` is the packed key of walk `l`'s first voxel; of the walks only
+/// `step`, `t_max` and `t_delta` are read. Keys must stay in range (no field wraps).
+///
+/// A scalar walk spends most of its time in mispredicted branches: the axis of the next
+/// step is, to the branch predictor, random. Here every lane makes its choice with
+/// comparisons and bit masks and no branch, and the compiler runs the lanes in vector
+/// registers. The arithmetic is the scalar walk's (the same additions in the same order),
+/// so the voxels are the same.
+pub(crate) fn lane_keys(
+    walks: &[Dda; LANES],
+    start: [u64; LANES],
+    limit: [u32; LANES],
+    t_end: f32,
+    keys: &mut [[u64; LANES]; LANE_STEPS + 1],
+) -> [u32; LANES] {
+    let limit = limit.map(|n| n.min(LANE_STEPS as u32));
+    let (t_max, t_delta) = (
+        walks.each_ref().map(|w| w.t_max),
+        walks.each_ref().map(|w| w.t_delta),
+    );
+    let (mut t0, mut t1, mut t2) = (
+        t_max.map(|t| t[0]),
+        t_max.map(|t| t[1]),
+        t_max.map(|t| t[2]),
+    );
+    let (d0, d1, d2) = (
+        t_delta.map(|t| t[0]),
+        t_delta.map(|t| t[1]),
+        t_delta.map(|t| t[2]),
+    );
+    // The change of a packed key for a step along each axis: +-1 in its field.
+    let steps_of = walks.each_ref().map(|w| w.step);
+    let key_step = |a: usize, at: u32| -> [u64; LANES] {
+        steps_of.map(|s| ((s.get(a).copied().unwrap_or(0) as i64) << at) as u64)
+    };
+    let (s0, s1, s2) = (key_step(0, 32), key_step(1, 16), key_step(2, 0));
+    let mut key = start;
+    let mut steps = [0u32; LANES];
+    let mut live = [u32::MAX; LANES];
+    let longest = limit.iter().copied().max().unwrap_or(0) as usize;
+    let (first, rest) = keys.split_at_mut(1);
+    first[0] = start;
+    for (n, row) in rest.iter_mut().enumerate().take(longest) {
+        for l in 0..LANES {
+            // Masks (all ones for true) select without branches: `y` when axis 1's
+            // boundary comes before axis 0's, `z` when axis 2's comes before both.
+            let mask = |c: bool| (c as u32).wrapping_neg();
+            let pick =
+                |m: u32, a: f32, b: f32| f32::from_bits((a.to_bits() & m) | (b.to_bits() & !m));
+            let y = mask(t1[l] < t0[l]);
+            let t01 = pick(y, t1[l], t0[l]);
+            let z = mask(t2[l] < t01);
+            let t = pick(z, t2[l], t01);
+            live[l] &= mask((n as u32) < limit[l]) & !mask(t > t_end);
+            steps[l] += live[l] & 1;
+            let (on2, on1) = (z, !z & y);
+            let on0 = !z & !y;
+            let wide = |m: u32| m as i32 as i64 as u64;
+            key[l] = key[l]
+                .wrapping_add((s0[l] & wide(on0)) | (s1[l] & wide(on1)) | (s2[l] & wide(on2)));
+            row[l] = key[l];
+            t0[l] = pick(on0, t0[l] + d0[l], t0[l]);
+            t1[l] = pick(on1, t1[l] + d1[l], t1[l]);
+            t2[l] = pick(on2, t2[l] + d2[l], t2[l]);
+        }
+    }
+    steps
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use crate::testutil::Lcg;
+    use crate::VoxelKey;
+    use std::vec::Vec;
+
+    /// The voxels of a walk from `o` along `d` in voxel `k`, step by step with
+    /// [`Dda::next_axis`]: at most `limit` steps, none whose boundary lies beyond `t_end`.
+    fn scalar(o: [f32; 3], d: [f32; 3], k: [i32; 3], limit: u32, t_end: f32) -> Vec<u64> {
+        let mut dda = Dda::new(o, d, k);
+        let packed = |k: [i32; 3]| {
+            VoxelKey {
+                x: k[0] as i16,
+                y: k[1] as i16,
+                z: k[2] as i16,
+            }
+            .packed()
+        };
+        let mut keys = std::vec![packed(dda.k)];
+        for _ in 0..limit {
+            let (a, t) = dda.next_axis();
+            if t > t_end {
+                break;
+            }
+            dda.advance(a);
+            keys.push(packed(dda.k));
+        }
+        keys
+    }
+
+    /// `lane_keys` takes the scalar walk's steps: on random rays, on rays whose boundaries
+    /// tie (from voxel centres and corners along directions with equal components, where
+    /// the lowest axis must go first), on axis-parallel rays, on walks cut short by
+    /// `t_end`, and on limits beyond `LANE_STEPS`.
+    #[test]
+    fn lane_keys_take_the_scalar_walks_steps() {
+        let mut rng = Lcg(11);
+        let mut r = |s: f64| ((rng.next() * 2.0 - 1.0) * s) as f32;
+        let mut rays = Vec::new();
+        for i in 0..400 {
+            let (o, d) = match i % 4 {
+                0 => ([r(50.0), r(50.0), r(50.0)], [r(40.0), r(40.0), r(40.0)]),
+                // Ties: a centre or a corner, equal (or opposite) integer components.
+                1 => {
+                    let c = [0.5f32, 0.0][(i / 4) % 2];
+                    let m = (1 + (i / 8) % 9) as f32;
+                    let s = |b: usize| if (i >> b) & 1 == 0 { m } else { -m };
+                    (
+                        [3.0 + c, -7.0 + c, 2.0 + c],
+                        [s(3), s(4), if i % 3 == 0 { 0.0 } else { s(5) }],
+                    )
+                }
+                // Axis-parallel, and along two axes.
+                2 => {
+                    let mut d = [0.0f32; 3];
+                    d[(i / 4) % 3] = r(300.0);
+                    if i % 8 == 6 {
+                        d[(i / 4 + 1) % 3] = r(30.0);
+                    }
+                    ([r(9.0), r(9.0), r(9.0)], d)
+                }
+                _ => ([r(5.0), r(5.0), r(5.0)], [r(200.0), r(200.0), r(200.0)]),
+            };
+            let k = o.map(|x| libm::floorf(x) as i32);
+            let end = [0, 1, 2].map(|a| libm::floorf(o[a] + d[a]) as i32);
+            let steps: u32 = (0..3).map(|a| (end[a] - k[a]).unsigned_abs()).sum();
+            // Some limits beyond the end (`t_end` stops those), some beyond LANE_STEPS.
+            let limit = match i % 5 {
+                0 => steps + 7,
+                1 => 1000,
+                _ => steps,
+            };
+            let t_end = if i % 7 == 0 { 0.5 } else { 1.0 + 1e-4 };
+            rays.push((o, d, k, limit, t_end));
+        }
+        // Walks of one batch share `t_end`: group by it.
+        for t_end in [0.5f32, 1.0 + 1e-4] {
+            let group: Vec<_> = rays.iter().filter(|r| r.4 == t_end).collect();
+            for batch in group.chunks(LANES) {
+                let lane = |l: usize| batch.get(l).map(|r| (r.0, r.1, r.2, r.3));
+                let idle = ([0.5f32; 3], [0.0f32; 3], [0i32; 3], 0u32);
+                let walks: [Dda; LANES] = core::array::from_fn(|l| {
+                    let (o, d, k, _) = lane(l).unwrap_or(idle);
+                    Dda::new(o, d, k)
+                });
+                let start = core::array::from_fn(|l| {
+                    let k = lane(l).unwrap_or(idle).2;
+                    scalar([0.0; 3], [0.0; 3], k, 0, t_end)[0]
+                });
+                let limit = core::array::from_fn(|l| lane(l).unwrap_or(idle).3);
+                let mut keys = [[0u64; LANES]; LANE_STEPS + 1];
+                let steps = lane_keys(&walks, start, limit, t_end, &mut keys);
+                for (l, ray) in batch.iter().enumerate() {
+                    let (o, d, k, limit, _) = **ray;
+                    let want = scalar(o, d, k, limit.min(LANE_STEPS as u32), t_end);
+                    let got: Vec<u64> = keys[..=steps[l] as usize]
+                        .iter()
+                        .map(|row| row[l])
+                        .collect();
+                    assert_eq!(got, want, "o {o:?} d {d:?} limit {limit} t_end {t_end}");
+                }
+            }
+        }
+    }
+}

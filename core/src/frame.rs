@@ -139,6 +139,14 @@ pub(crate) const BLOCK_CACHE: usize = if cfg!(target_pointer_width = "64") {
     128
 };
 
+/// Copies of `missed` masks in a [`FrameState`]: one per block cache entry on 64-bit
+/// targets, none on 32-bit ones (whose walks do not read them).
+const MISSED_COPIES: usize = if cfg!(target_pointer_width = "64") {
+    BLOCK_CACHE
+} else {
+    0
+};
+
 /// The block cache entry of a packed block key: a multiplicative hash, as the blocks
 /// along one ray (up to dozens in a row on one axis) must not evict each other.
 #[inline]
@@ -172,6 +180,10 @@ pub(crate) struct FrameState {
     /// Blocks this frame has touched, by [`block_cache_index`]: (packed key, slot). They
     /// cannot be evicted during the frame, so entries never go stale.
     pub(crate) block_cache: [(u64, u32); BLOCK_CACHE],
+    /// Beside each block cache entry, a copy of its block's `missed` mask, for the
+    /// free-space walks of 64-bit targets (none on 32-bit ones): a copy may lag behind
+    /// the block, never run ahead (the mask only grows during a frame).
+    pub(crate) missed_copy: [u64; MISSED_COPIES],
     pub(crate) voxel_cache: (u64, usize),
     /// Open voxel accumulators of phase 1.
     pub(crate) acc: [Accumulator; ACCUMULATORS],
@@ -255,6 +267,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             ),
             head: NIL,
             block_cache: [(0, 0); BLOCK_CACHE],
+            missed_copy: [0; MISSED_COPIES],
             voxel_cache: (0, 0),
             acc: [Accumulator::NONE; ACCUMULATORS],
             voxels_exhausted: false,
@@ -295,6 +308,31 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         }
     }
 
+    /// The `missed` mask of the block with packed key `packed` if the frame's block cache
+    /// holds the block, else 0 (nothing known). No branch on the answer: callers use it to
+    /// rule out voxels that certainly have their miss, many in a row.
+    /// The mask is the cache's copy (see [`FrameState::missed_copy`]), which lives in
+    /// the cache's own cache lines, not the block's.
+    #[inline(always)]
+    pub(crate) fn cached_missed(f: &FrameState, packed: u64) -> u64 {
+        let c = block_cache_index(packed);
+        let key = f.block_cache.get(c).map_or(0, |e| e.0);
+        let missed = f.missed_copy.get(c).copied().unwrap_or(0);
+        missed & ((key == packed) as u64).wrapping_neg()
+    }
+
+    /// Records in the frame's block cache that cell `bit` (a one-bit mask) of the block
+    /// with packed key `packed` got its miss.
+    #[inline(always)]
+    pub(crate) fn note_missed(f: &mut FrameState, packed: u64, bit: u64) {
+        let c = block_cache_index(packed);
+        if f.block_cache.get(c).is_some_and(|e| e.0 == packed) {
+            if let Some(m) = f.missed_copy.get_mut(c) {
+                *m |= bit;
+            }
+        }
+    }
+
     /// [`Map::frame_block`] for a block not in the frame's block cache.
     #[inline(never)]
     fn frame_block_uncached(
@@ -321,8 +359,12 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             b.frame_next = f.head;
             f.head = bs as u32 + 1;
         }
+        let missed = b.missed;
         if let Some(entry) = f.block_cache.get_mut(c) {
             *entry = (packed, bs as u32);
+        }
+        if let Some(m) = f.missed_copy.get_mut(c) {
+            *m = missed;
         }
         Some(bs)
     }

@@ -10,7 +10,7 @@
 
 use crate::block::bits;
 use crate::config::{to_fixed, Config, MissModel};
-use crate::dda::Dda;
+use crate::dda::{lane_keys, Dda, LANES, LANE_STEPS};
 use crate::frame::FrameState;
 use crate::gaussian::{PrepCache, Prepared};
 use crate::key::{VoxelKey, KEY_LIMIT};
@@ -23,24 +23,57 @@ use nalgebra::Vector3;
 /// Prepared-Gaussian cache of phase 3 (voxel statistics no longer change then).
 type GaussCache = PrepCache<32>;
 
-/// A free-space ray in voxel units (`o` to `target`, from the sensor's voxel `start` to
-/// the end voxel `end`, which gets a miss only if `include_end`) and in world metres.
+/// A free-space ray in voxel units: `o` to `target`, from the sensor's voxel `start` to
+/// the end voxel `end`, which gets a miss only if `include_end`.
+#[derive(Clone, Copy, Default)]
 struct Segment {
     o: [f32; 3],
     target: [f32; 3],
     start: [i32; 3],
     end: [i32; 3],
     include_end: bool,
-    ray: Ray,
 }
 
 impl Segment {
     /// The segment from the frame's sensor to `target` (voxel units) in voxel `end`.
     fn new(f: &FrameState, target: [f32; 3], end: &VoxelKey, include_end: bool) -> Segment {
-        let o = f.origin_s;
+        let k = f.origin_key;
+        Segment {
+            o: f.origin_s,
+            target,
+            start: [k.x as i32, k.y as i32, k.z as i32],
+            end: [end.x as i32, end.y as i32, end.z as i32],
+            include_end,
+        }
+    }
+
+    /// The steps of its walk: one per voxel boundary between `start` and `end`.
+    fn steps(&self) -> u32 {
+        (0..3)
+            .map(|a| (self.end[a] - self.start[a]).unsigned_abs())
+            .sum()
+    }
+
+    /// Whether the walk may leave the key range: overshooting the end by a few voxels
+    /// stays in range unless an end is near its limit.
+    fn near_limit(&self) -> bool {
+        (self.start.iter().chain(&self.end)).any(|c| c.unsigned_abs() > KEY_LIMIT as u32 - 8)
+    }
+
+    /// The walk's start: voxel `start`, boundaries along `target - o`.
+    fn dda(&self) -> Dda {
+        let (o, target) = (self.o, self.target);
+        Dda::new(o, [0, 1, 2].map(|a| target[a] - o[a]), self.start)
+    }
+
+    /// The segment as a ray in world metres, for an NDT-OM miss. Built when a miss needs
+    /// it, not per segment: most rays meet no Gaussian, and on a Cortex-M4 the square
+    /// root is a software call.
+    fn ray(&self, f: &FrameState) -> Ray {
+        let (o, target) = (self.o, self.target);
         let d = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
         let len_s = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-        let ray = Ray {
+        Ray {
             origin: f.origin,
             dir: if len_s > 0.0 {
                 [d[0] / len_s, d[1] / len_s, d[2] / len_s]
@@ -48,18 +81,31 @@ impl Segment {
                 [0.0, 0.0, 1.0]
             },
             len: len_s * f.h,
-            measured: !include_end,
-        };
-        let k = f.origin_key;
-        Segment {
-            o,
-            target,
-            start: [k.x as i32, k.y as i32, k.z as i32],
-            end: [end.x as i32, end.y as i32, end.z as i32],
-            include_end,
-            ray,
+            measured: !self.include_end,
         }
     }
+}
+
+/// The ray parameter beyond which a walk stops: the end is at 1, and the margin keeps a
+/// walk from stopping one voxel short on rounding.
+const T_END: f32 = 1.0 + 1e-4;
+
+/// Whether rays are walked [`LANES`] at a time: on 64-bit targets, whose out-of-order
+/// cores lose most of a scalar walk's time to mispredicted branches. A Cortex-M has no
+/// such predictor to lose, and its stack is small.
+const LANES_PAY: bool = cfg!(target_pointer_width = "64");
+
+/// The most rays waiting to be walked: none on 32-bit targets, which walk every ray at
+/// once.
+const PENDING: usize = if LANES_PAY { LANES } else { 0 };
+
+/// Rays of phase 3 waiting to be walked, and the voxels [`lane_keys`] finds for them.
+struct Pending {
+    segments: [Segment; PENDING],
+    len: usize,
+    keys: [[u64; LANES]; LANE_STEPS + 1],
+    /// The steps of one walk not known to be missed already.
+    todo: [u16; LANE_STEPS + 1],
 }
 
 /// A free-space ray in world metres.
@@ -73,9 +119,17 @@ struct Ray {
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// Casts the frame's rays, block by block along the sorted frame list starting at
-    /// `head`: to every hit voxel, then to every truncated end that got no points.
+    /// `head`: to every hit voxel, then to every truncated end that got no points. On
+    /// 64-bit targets the rays go [`LANES`] at a time through [`lane_keys`] and are then
+    /// walked one by one, in the same order.
     pub(crate) fn clear_free_space(&mut self, f: &mut FrameState, head: u32) {
         let mut cache = GaussCache::new();
+        let mut pending = Pending {
+            segments: [Segment::default(); PENDING],
+            len: 0,
+            keys: [[0; LANES]; LANE_STEPS + 1],
+            todo: [0; LANE_STEPS + 1],
+        };
         self.for_each_frame_block(head, |map, _, b| {
             for cell in bits(b.hit) {
                 let key = VoxelKey::from_block_cell(b.packed_key(), cell);
@@ -84,34 +138,121 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                     Some(v) => mean_in_voxel(v, &key, f.qscale),
                     None => centre(&key),
                 };
-                map.cast(f, &mut cache, target, &key, false);
+                map.cast(f, &mut cache, &mut pending, target, &key, false);
             }
             for cell in bits(b.far & !b.hit) {
                 let key = VoxelKey::from_block_cell(b.packed_key(), cell);
-                map.cast(f, &mut cache, centre(&key), &key, true);
+                map.cast(f, &mut cache, &mut pending, centre(&key), &key, true);
             }
         });
+        self.walk_pending(f, &mut cache, &mut pending);
     }
 
     /// Exact voxel traversal (Amanatides & Woo) from the sensor to `target` (in voxel
     /// units), giving each traversed voxel its miss; `end` itself only if `include_end`.
+    /// Walked now on 32-bit targets, else with the rays pending before it, once
+    /// [`LANES`] are pending.
     fn cast(
         &mut self,
         f: &mut FrameState,
         cache: &mut GaussCache,
+        pending: &mut Pending,
         target: [f32; 3],
         end: &VoxelKey,
         include_end: bool,
     ) {
         f.report.rays += 1;
         let seg = Segment::new(f, target, end, include_end);
-        // Overshooting the end by a few voxels stays in range unless an end is near it.
-        let near_limit =
-            (seg.start.iter().chain(&seg.end)).any(|c| c.unsigned_abs() > KEY_LIMIT as u32 - 8);
-        if near_limit {
-            self.walk_checked(f, cache, &seg);
+        if !LANES_PAY {
+            self.walk_one(f, cache, &seg);
+            return;
+        }
+        if let Some(slot) = pending.segments.get_mut(pending.len) {
+            *slot = seg;
+            pending.len += 1;
+        }
+        if pending.len == PENDING {
+            self.walk_pending(f, cache, pending);
+        }
+    }
+
+    /// Walks the pending rays in order, the voxels of their walks (up to [`LANE_STEPS`]
+    /// steps) found for all of them at once.
+    fn walk_pending(&mut self, f: &mut FrameState, cache: &mut GaussCache, pending: &mut Pending) {
+        let segments = pending.segments.get(..pending.len).unwrap_or(&[]);
+        if segments.is_empty() {
+            return;
+        }
+        let lanes = |seg: &Segment| !seg.near_limit() && seg.steps() as usize <= LANE_STEPS;
+        let lane = |l: usize| segments.get(l).copied().unwrap_or_default();
+        let walks: [Dda; LANES] = core::array::from_fn(|l| lane(l).dda());
+        let start = core::array::from_fn(|l| key_of(lane(l).start).packed());
+        let limit = core::array::from_fn(|l| {
+            segments
+                .get(l)
+                .filter(|seg| lanes(seg))
+                .map_or(0, Segment::steps)
+        });
+        let steps = lane_keys(&walks, start, limit, T_END, &mut pending.keys);
+        for ((l, seg), &n) in segments.iter().enumerate().zip(&steps) {
+            if lanes(seg) {
+                let keys = pending.keys.get(..=n as usize).unwrap_or(&[]);
+                self.walk_keys(f, cache, seg, (keys, l), &mut pending.todo);
+            } else {
+                self.walk_one(f, cache, seg);
+            }
+        }
+        pending.len = 0;
+    }
+
+    /// The misses of a walk through the voxels with packed keys `keys[..][lane]`, in the
+    /// key range (from [`lane_keys`]). Most of them have their miss already: a first
+    /// pass rules those out without branches (a block's `missed` mask, from the frame's
+    /// block cache, only grows during a frame) and lists the rest in `todo`; the second
+    /// goes through that list as the scalar walk would, block lookups and all.
+    fn walk_keys(
+        &mut self,
+        f: &mut FrameState,
+        cache: &mut GaussCache,
+        seg: &Segment,
+        (keys, lane): (&[[u64; LANES]], usize),
+        todo: &mut [u16; LANE_STEPS + 1],
+    ) {
+        let mut count = 0;
+        for (n, row) in keys.iter().enumerate() {
+            let key = row.get(lane).copied().unwrap_or(0);
+            let missed = Self::cached_missed(f, block_of_packed(key));
+            if let Some(t) = todo.get_mut(count) {
+                *t = n as u16;
+            }
+            count += ((missed >> cell_of_packed(key)) & 1 == 0) as usize;
+        }
+        let last = seg.steps() as usize;
+        for &n in todo.iter().take(count) {
+            let n = n as usize;
+            let key = keys
+                .get(n)
+                .and_then(|row| row.get(lane))
+                .copied()
+                .unwrap_or(0);
+            let (block, cell) = (block_of_packed(key), cell_of_packed(key));
+            let (at, missed) = self.enter_block(f, block);
+            if !has_cell(missed, cell)
+                && self
+                    .walk_visit(f, cache, seg, at, (block, cell), n == last)
+                    .is_none()
+            {
+                return;
+            }
+        }
+    }
+
+    /// Walks one segment, checking the key range only where it may be left.
+    fn walk_one(&mut self, f: &mut FrameState, cache: &mut GaussCache, seg: &Segment) {
+        if seg.near_limit() {
+            self.walk_checked(f, cache, seg);
         } else {
-            self.walk(f, cache, &seg);
+            self.walk(f, cache, seg);
         }
     }
 
@@ -130,8 +271,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// to 0 and the block key steps). Masks and increments are then constants, which
     /// leaves registers for the rest on 32-bit targets.
     fn walk(&mut self, f: &mut FrameState, cache: &mut GaussCache, seg: &Segment) {
-        let (o, target, start, end) = (seg.o, seg.target, seg.start, seg.end);
-        let dda = Dda::new(o, [0, 1, 2].map(|a| target[a] - o[a]), start);
+        let start = seg.start;
+        let dda = seg.dda();
         let [d0, d1, d2] = dda.t_delta;
         let [mut t0, mut t1, mut t2] = dda.t_max;
         let Some(key) = VoxelKey::from_ints(start[0], start[1], start[2]) else {
@@ -145,7 +286,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let (b0, b1, b2) = (block_step(0, 32), block_step(1, 16), block_step(2, 0));
         let mut block = key.block();
         let mut walked = key.cell() ^ flip;
-        let mut remaining: u32 = (0..3).map(|a| (end[a] - start[a]).unsigned_abs()).sum();
+        let mut remaining = seg.steps();
         let (mut at, mut missed) = self.enter_block(f, block);
         loop {
             let cell = walked ^ flip;
@@ -163,7 +304,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             let y = t1 < t0;
             let t01 = if y { t1 } else { t0 };
             let z = t2 < t01;
-            if (if z { t2 } else { t01 }) > 1.0 + 1e-4 {
+            if (if z { t2 } else { t01 }) > T_END {
                 return;
             }
             let axis = if z {
@@ -208,7 +349,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         if last && !seg.include_end && VoxelKey::from_block_cell(block, cell) == key_of(seg.end) {
             return None;
         }
-        Some(self.visit(f, cache, &seg.ray, at, (block, cell)))
+        Some(self.visit(f, cache, seg, at, (block, cell)))
     }
 
     /// [`Map::walk`] for a segment that may leave the key range: the voxel-by-voxel
@@ -228,7 +369,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 let (block, cell) = (voxel.block(), voxel.cell());
                 let (at, missed) = self.enter_block(f, block);
                 if !has_cell(missed, cell) {
-                    self.visit(f, cache, &seg.ray, at, (block, cell));
+                    self.visit(f, cache, seg, at, (block, cell));
                 }
                 true
             },
@@ -243,13 +384,13 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         &mut self,
         f: &mut FrameState,
         cache: &mut GaussCache,
-        ray: &Ray,
+        seg: &Segment,
         at: Option<usize>,
         (block, cell): (u64, u32),
     ) -> u64 {
         match at {
             Some(bs) => {
-                self.miss(f, cache, ray, (block, cell), bs);
+                self.miss(f, cache, seg, (block, cell), bs);
                 self.blocks.get(bs).map_or(0, |b| b.missed)
             }
             None => {
@@ -272,14 +413,14 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     /// The miss of cell `cell` of the block with packed key `block` (in slot `bs`,
-    /// without a miss yet this frame) for `ray`. The voxel's key is built only when its
+    /// without a miss yet this frame) for the segment `seg`. The voxel's key is built only when its
     /// Gaussian is needed.
     #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn miss(
         &mut self,
         f: &mut FrameState,
         cache: &mut GaussCache,
-        ray: &Ray,
+        seg: &Segment,
         (block, cell): (u64, u32),
         bs: usize,
     ) {
@@ -296,7 +437,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             if let Some((vs, v)) = found.and_then(|vs| Some((vs, self.voxels.get(vs)?))) {
                 if v.n >= cfg.n_min {
                     let g = cache.get(vs, || v.prepared(cfg));
-                    match ndt_om_miss(cfg, ray, &g) {
+                    match ndt_om_miss(cfg, &seg.ray(f), &g) {
                         Some(l) => delta = to_fixed(l),
                         None => return,
                     }
@@ -307,6 +448,9 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         if let Some(b) = self.blocks.get_mut(bs) {
             b.missed |= bit;
             b.add_logodds(cell, delta, lo, hi);
+        }
+        if LANES_PAY {
+            Self::note_missed(f, block, bit);
         }
     }
 }
@@ -434,6 +578,20 @@ fn has_cell(mask: u64, cell: u32) -> bool {
 const X_FIELD: u32 = 0b00_00_11;
 const Y_FIELD: u32 = 0b00_11_00;
 const Z_FIELD: u32 = 0b11_00_00;
+
+/// The packed block key of the voxel with packed key `key`: each 16-bit field `x + 2^15`
+/// becomes `(x >> 2) + 2^15`, which is `((x + 2^15) >> 2) + 3 * 2^13`.
+#[inline(always)]
+fn block_of_packed(key: u64) -> u64 {
+    ((key >> 2) & 0x3fff_3fff_3fff) + 0x6000_6000_6000
+}
+
+/// [`VoxelKey::cell`] of the voxel with packed key `key` (the offset 2^15 of a field
+/// leaves its low bits alone).
+#[inline(always)]
+fn cell_of_packed(key: u64) -> u32 {
+    (((key >> 32) & 0x3) | ((key >> 14) & 0xc) | ((key << 4) & 0x30)) as u32
+}
 
 /// The key of in-range voxel coordinates (the walk's ends are valid keys).
 fn key_of(k: [i32; 3]) -> VoxelKey {
@@ -627,12 +785,46 @@ mod tests {
         assert_eq!((before, after), (870, 870 - 410));
     }
 
-    /// The fast walk and the checked `traverse` give every voxel the same miss, ray
+    /// How the test walks a ray.
+    #[derive(Clone, Copy, PartialEq)]
+    enum Walk {
+        /// [`Map::walk`], the scalar walk of 32-bit targets.
+        Scalar,
+        /// [`Map::walk_checked`], voxel by voxel with key checks.
+        Checked,
+        /// [`Map::cast`]: on 64-bit targets, in batches through `lane_keys`.
+        Cast,
+    }
+
+    /// 300 rays from near the origin (target, end voxel, whether the end is included);
+    /// every 15th is long: up to 640 steps, most beyond a batch's 256.
+    fn test_rays(rng: &mut Lcg) -> Vec<([f32; 3], VoxelKey, bool)> {
+        (0..300)
+            .map(|i| {
+                let (u, v, w) = (rng.next(), rng.next(), rng.next());
+                let reach = if i % 15 == 3 { 150.0 } else { 15.0 };
+                let target = [
+                    ((u * 2.0 - 1.0) * reach) as f32,
+                    ((v * 2.0 - 1.0) * reach) as f32,
+                    (w * 40.0 - 5.0) as f32,
+                ];
+                let end = key(
+                    libm::floorf(target[0]) as i16,
+                    libm::floorf(target[1]) as i16,
+                    libm::floorf(target[2]) as i16,
+                );
+                (target, end, i % 3 == 0)
+            })
+            .collect()
+    }
+
+    /// The fast walks and the checked `traverse` give every voxel the same miss, ray
     /// after ray, in a map with Gaussians (NDT-OM misses), with and without the end
-    /// voxel, and in a map too small for the blocks the rays cross (dropped misses).
+    /// voxel, in a map too small for the blocks the rays cross (dropped misses), and for
+    /// rays too long for a batch among short ones.
     #[test]
     fn walk_is_the_checked_traverse() {
-        fn run<const B: usize>(checked: bool, seed: u64) -> (FrameReport, Vec<u8>) {
+        fn run<const B: usize>(how: Walk, seed: u64) -> (FrameReport, Vec<u8>) {
             let mut rng = Lcg(seed);
             let cfg = Config::with_cell_size(0.1);
             let mut map: Map<2048, B, 4> = Map::try_new(cfg).unwrap();
@@ -651,36 +843,68 @@ mod tests {
             map.integrate(&at(0.03, 0.07, 0.0), &wall).unwrap();
             let mut f = map.begin_frame(&at(0.13, -0.21, 0.05)).unwrap();
             let mut cache = GaussCache::new();
-            for i in 0..300 {
-                let (u, v, w) = (rng.next(), rng.next(), rng.next());
-                let target = [
-                    (u * 30.0 - 15.0) as f32,
-                    (v * 30.0 - 15.0) as f32,
-                    (w * 40.0 - 5.0) as f32,
-                ];
-                let end = key(
-                    libm::floorf(target[0]) as i16,
-                    libm::floorf(target[1]) as i16,
-                    libm::floorf(target[2]) as i16,
-                );
-                // In a frame the end voxel's block exists (it got the hit or the far end).
+            let mut pending = Pending {
+                segments: [Segment::default(); PENDING],
+                len: 0,
+                keys: [[0; LANES]; LANE_STEPS + 1],
+                todo: [0; LANE_STEPS + 1],
+            };
+            let rays = test_rays(&mut rng);
+            // In a frame the end voxels' blocks exist before the rays (they got the hits
+            // or the far ends).
+            for (_, end, _) in &rays {
                 map.frame_block(&mut f, end.block(), false);
-                let seg = Segment::new(&f, target, &end, i % 3 == 0);
-                if checked {
-                    map.walk_checked(&mut f, &mut cache, &seg);
-                } else {
-                    map.walk(&mut f, &mut cache, &seg);
+            }
+            for &(target, end, include_end) in &rays {
+                let seg = Segment::new(&f, target, &end, include_end);
+                match how {
+                    Walk::Scalar => map.walk(&mut f, &mut cache, &seg),
+                    Walk::Checked => map.walk_checked(&mut f, &mut cache, &seg),
+                    Walk::Cast => {
+                        map.cast(&mut f, &mut cache, &mut pending, target, &end, include_end);
+                    }
                 }
+            }
+            map.walk_pending(&mut f, &mut cache, &mut pending);
+            if how == Walk::Cast {
+                assert_eq!(f.report.rays, 300);
+                f.report.rays = 0;
             }
             (f.report, snapshot(&map))
         }
         for seed in [1, 2, 3] {
-            let (fast, checked) = (run::<512>(false, seed), run::<512>(true, seed));
-            assert_eq!(fast.0.dropped_misses, 0);
-            assert!(fast.1 == checked.1, "seed {seed}");
-            let (fast, checked) = (run::<40>(false, seed), run::<40>(true, seed));
-            assert!(fast.0.dropped_misses > 0);
-            assert_eq!(fast, checked);
+            let checked = run::<4096>(Walk::Checked, seed);
+            assert_eq!(checked.0.dropped_misses, 0);
+            for how in [Walk::Scalar, Walk::Cast] {
+                assert!(run::<4096>(how, seed) == checked, "seed {seed}");
+            }
+            let checked = run::<40>(Walk::Checked, seed);
+            assert!(checked.0.dropped_misses > 0);
+            for how in [Walk::Scalar, Walk::Cast] {
+                let got = run::<40>(how, seed);
+                assert_eq!(got.0, checked.0, "seed {seed}, full map, {}", how as u8);
+                assert!(got == checked, "seed {seed}, full map, {}", how as u8);
+            }
+        }
+    }
+
+    /// The packed block key and cell of a packed voxel key are those of the voxel key.
+    #[test]
+    fn block_and_cell_of_packed_keys() {
+        let mut rng = Lcg(7);
+        let edges = [-32767i16, -32766, -5, -4, -3, -1, 0, 1, 3, 4, 32766, 32767];
+        let edge_keys = edges.into_iter().flat_map(|x| {
+            edges
+                .into_iter()
+                .flat_map(move |y| edges.into_iter().map(move |z| key(x, y, z)))
+        });
+        let random = (0..10_000).map(|_| {
+            let mut c = || ((rng.next() * 65534.0) as i32 - 32767) as i16;
+            key(c(), c(), c())
+        });
+        for k in edge_keys.chain(random) {
+            assert_eq!(block_of_packed(k.packed()), k.block(), "{k:?}");
+            assert_eq!(cell_of_packed(k.packed()), k.cell(), "{k:?}");
         }
     }
 
