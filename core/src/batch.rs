@@ -70,7 +70,9 @@ pub(crate) struct Batch {
     /// ([`crate::vote_hash`]) if it votes for a class, else `u32::MAX`. A point votes
     /// in a voxel if `vote_key <= vote_max >> 1` ([`Accumulator::vote_key_max`]), which
     /// is `hash <= vote_max` (`vote_max` is `2^k - 1`) for the points with a class and
-    /// never true for the others.
+    /// never true for the others. Not kept on targets that accumulate point by point
+    /// ([`PACK_PER_POINT`]): they find a point's vote key only when its voxel samples
+    /// votes ([`Batch::votes_in`]).
     pub(crate) vote_key: [u32; BATCH],
     pub(crate) status: [u8; BATCH],
 }
@@ -340,8 +342,10 @@ impl Batch {
             let no_depth = from_depth && z.to_bits().wrapping_sub(1) >= 0x7f7f_ffff;
             let bad_label = vote[j] > classes;
             // Votes known now (one-class label images; others set theirs with the labels).
-            let hash = vote_hash(&[x, y, z]);
-            vote_key[j] = if vote[j] != 0 { hash >> 1 } else { u32::MAX };
+            if !PACK_PER_POINT {
+                let hash = vote_hash(&[x, y, z]);
+                vote_key[j] = if vote[j] != 0 { hash >> 1 } else { u32::MAX };
+            }
             // `0 < r2 <= max2` (NaN fails) in float bits, as above; `max2` is positive.
             let r2 = x * x + y * y + z * z;
             let mut fast = r2.to_bits().wrapping_sub(1) < max2_bits;
@@ -420,7 +424,9 @@ impl Batch {
             let voting = voting_classes(&l, config);
             let vote = voting.first().copied().unwrap_or(0);
             self.vote[j] = vote;
-            self.vote_key[j] = if vote != 0 {
+            self.vote_key[j] = if PACK_PER_POINT {
+                u32::MAX // see `votes_in`
+            } else if vote != 0 {
                 vote_hash(&self.point(j)) >> 1
             } else {
                 u32::MAX
@@ -444,6 +450,18 @@ impl Batch {
         };
         let q = [0, 1, 2].map(|a| self.q[a].get(j).copied().unwrap_or(0));
         (((x as u64) << 32) | yz as u64, packed_offsets(q))
+    }
+
+    /// Whether point `j` votes in a voxel whose points vote up to vote key
+    /// `vote_key_max` (see [`Batch::vote_key`]), for targets that accumulate point by
+    /// point: the vote hash is only computed when the voxel samples its votes (most
+    /// voxels take every vote: then `vote_key_max` is `u32::MAX >> 1`, above every vote
+    /// key).
+    #[inline(always)]
+    pub(crate) fn votes_in(&self, j: usize, vote_key_max: u32) -> bool {
+        let votes_for_a_class = self.vote.get(j).is_some_and(|&v| v != 0);
+        votes_for_a_class
+            && (vote_key_max >= u32::MAX >> 1 || vote_hash(&self.point(j)) >> 1 <= vote_key_max)
     }
 
     /// The sensor point of point `j`.

@@ -156,7 +156,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             }
             let (key, w) = batch.packed(j);
             let (acc, slot, vote_key_max) = self.point_accumulator(f, key);
-            let votes = (batch.vote_key[j] <= vote_key_max) as u32;
+            let votes = batch.votes_in(j, vote_key_max) as u32;
             self.add_points(f, (acc, slot), (1, &w), (batch.vote[j], votes));
         }
     }
@@ -361,7 +361,9 @@ mod tests {
                         let mut p = [
                             0.1 * c - 0.4 + 0.02 * rng.next() as f32,
                             0.1 * (c % 3.0) + 0.02 * rng.next() as f32,
-                            1.0 + 0.1 * frame as f32 + 0.02 * rng.next() as f32,
+                            // The same voxels every frame: from the second on they sample
+                            // their votes.
+                            1.0 + 0.005 * frame as f32 + 0.02 * rng.next() as f32,
                         ];
                         match i % 53 {
                             5 => p[2] = f32::NAN,
@@ -419,6 +421,18 @@ mod tests {
         (reports, snapshot(&*map))
     }
 
+    /// The largest vote-sampling exponent of a voxel after `frames` (see `votes.rs`).
+    fn most_sampled(frames: &[Vec<LabeledPoint>]) -> u8 {
+        let mut cfg = Config::DEFAULT;
+        cfg.votes_per_frame = 4;
+        let mut map: std::boxed::Box<Map<1024, 256, 6>> = std::boxed::Box::new(Map::new(cfg));
+        for (n, points) in frames.iter().enumerate() {
+            let _ = map.integrate(&at(0.01 * n as f32, 0.0, 0.0), points);
+        }
+        let voxels = map.voxels.slots.iter();
+        voxels.map(|v| v.vote_exponent()).max().unwrap_or(0)
+    }
+
     #[test]
     fn points_runs_and_voxels_give_the_same_map() {
         let mut rng = Lcg(11);
@@ -432,6 +446,7 @@ mod tests {
             }
             let r = &runs[1];
             assert!(r.points_used > 0 && r.rejected_depth > 0 && r.rejected_label > 0);
+            assert!(most_sampled(&frames) > 0, "no voxel samples its votes");
             assert!(r.truncated > 0);
             // A map too small for the frames: evictions and dropped points.
             let (runs, runs_map) = integrate_with::<8, 4>(&frames, Way::Runs);
