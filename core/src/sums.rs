@@ -430,7 +430,10 @@ mod tests {
             let _ = map.integrate(&at(0.01 * n as f32, 0.0, 0.0), points);
         }
         let voxels = map.voxels.slots.iter();
-        voxels.map(|v| v.vote_exponent()).max().unwrap_or(0)
+        voxels
+            .map(crate::voxel::Voxel::vote_exponent)
+            .max()
+            .unwrap_or(0)
     }
 
     #[test]
