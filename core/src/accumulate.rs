@@ -138,6 +138,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             slot: vs,
             key,
             vote_key_max: vote_max(self.voxels.slots.get(vs).map_or(0, Voxel::vote_exponent)) >> 1,
+            votes: (0, 0),
         };
     }
 
@@ -151,12 +152,34 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// Adds an accumulator's points to its voxel and empties it.
     #[inline]
     fn flush(&mut self, acc: &mut Accumulator) {
-        if acc.sums.n > 0 {
-            if let Some(v) = self.voxels.slots.get_mut(acc.slot) {
+        if let Some(v) = self.voxels.slots.get_mut(acc.slot) {
+            if acc.sums.n > 0 {
                 v.merge(&acc.sums.unbias());
+            }
+            let (class, count) = acc.votes;
+            if count > 0 {
+                v.take_votes(class, count);
             }
         }
         *acc = Accumulator::NONE;
+    }
+
+    /// One vote for `class` by a point in accumulator `a`'s voxel, counted in the
+    /// accumulator while its class stays the same (see [`Accumulator::votes`]).
+    #[inline(always)]
+    pub(crate) fn vote_in_accumulator(&mut self, f: &mut FrameState, a: usize, class: u8) {
+        let Some(acc) = f.acc.get_mut(a) else {
+            return;
+        };
+        let (pending, count) = acc.votes;
+        if pending == class || count == 0 {
+            acc.votes = (class, count + 1);
+        } else {
+            if let Some(v) = self.voxels.slots.get_mut(acc.slot) {
+                v.take_votes(pending, count);
+            }
+            acc.votes = (class, 1);
+        }
     }
 
     /// A point at world position `w`, `range` metres from the sensor, beyond max range:

@@ -109,6 +109,11 @@ pub(crate) struct Accumulator {
     /// most this: [`vote_max`] of the voxel's vote-sampling exponent (fixed during a
     /// frame), halved.
     pub(crate) vote_key_max: u32,
+    /// Votes taken for a class and not yet in the voxel's histogram, as (class, count),
+    /// on targets that accumulate point by point: a voxel's points mostly vote for one
+    /// class, and counting them here saves a histogram update per point. (The bins and
+    /// the votes-taken count saturate, so when votes arrive does not matter.)
+    pub(crate) votes: (u8, u32),
 }
 
 impl Accumulator {
@@ -118,6 +123,7 @@ impl Accumulator {
         slot: usize::MAX,
         key: 0,
         vote_key_max: 0,
+        votes: (0, 0),
     };
 }
 

@@ -149,16 +149,26 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         batch: &Batch,
         labels: impl Fn(usize) -> Labels,
     ) {
+        let (mut used, mut dropped) = (0, 0);
         for j in 0..batch.len.min(BATCH) {
             if batch.status[j] != FAST {
                 self.other_point(f, batch, j, &labels);
                 continue;
             }
             let (key, w) = batch.packed(j);
-            let (acc, slot, vote_key_max) = self.point_accumulator(f, key);
-            let votes = batch.votes_in(j, vote_key_max) as u32;
-            self.add_points(f, (acc, slot), (1, &w), (batch.vote[j], votes));
+            let (acc, _, vote_key_max) = self.point_accumulator(f, key);
+            if acc == DROPPED {
+                dropped += 1;
+                continue;
+            }
+            if batch.votes_in(j, vote_key_max) {
+                self.vote_in_accumulator(f, acc, batch.vote[j]);
+            }
+            self.add_to_accumulator(f, acc, &w, 1);
+            used += 1;
         }
+        f.report.points_used += used;
+        f.report.dropped_points += dropped;
     }
 
     /// Accumulation by runs of consecutive points in one voxel.
