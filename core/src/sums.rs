@@ -6,9 +6,9 @@
 //! depend on grouping; voxels are looked up in the order of their first point each way):
 //!
 //! - **by points** (32-bit targets, such as a Cortex-M): every point goes straight into
-//!   its voxel's accumulator. The runs below are short on a small sensor (two points
-//!   on average on the firmware's 160x120 frames at 10 cm), and there ending a run
-//!   costs more than the additions it saves;
+//!   its voxel's accumulator, votes included (`Accumulator::votes`). The runs below are
+//!   short on a small sensor (two points on average on the firmware's 160x120 frames at
+//!   10 cm), and there ending a run costs more than the additions it saves;
 //! - **by runs** (64-bit targets without 256-bit vectors): consecutive points of one
 //!   voxel are summed in registers and added to the voxel's accumulator once;
 //! - **by voxel** (targets with 256-bit vectors): once per voxel of the batch, a
