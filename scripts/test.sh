@@ -7,7 +7,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-step() { printf '\n==> %s\n' "$*"; }
+# Each step's banner says when it started (seconds since the start), so a slow step shows.
+step() { printf '\n==> %s (at %d s)\n' "$*" "$SECONDS"; }
 
 step "toolchain components and targets"
 rustup component add rustfmt clippy >/dev/null 2>&1 || true
@@ -50,5 +51,6 @@ step "cargo test (workspace: unit, property, integration, doc tests)"
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT
 cargo test --workspace 2>&1 | tee "$log"
+echo "the test command took $SECONDS s"
 # One closing line over all test binaries (cargo prints one summary per binary).
 awk '/^test result:/ { p += $4; f += $6 } END { printf "\nsndt: %d passed, %d failed\n", p, f }' "$log"
