@@ -81,7 +81,8 @@ pub(crate) const LANE_STEPS: usize = if cfg!(target_pointer_width = "64") {
 /// [`Dda::next_axis`] chooses it (the lowest axis on ties). A walk stops after `limit[l]`
 /// steps (at most [`LANE_STEPS`]), or before a step whose boundary lies beyond
 /// `t = t_end`. `start[l]` is the packed key of walk `l`'s first voxel; of the walks only
-/// `step`, `t_max` and `t_delta` are read. Keys must stay in range (no field wraps).
+/// `step`, `t_max` and `t_delta` are read. The keys of the steps a walk takes must stay
+/// in range (no field wraps); past its step count a lane holds values nobody reads.
 ///
 /// A scalar walk spends most of its time in mispredicted branches: the axis of the next
 /// step is, to the branch predictor, random. Here every lane makes its choice with
