@@ -317,6 +317,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// The `missed` mask of the block with packed key `packed` if the frame's block cache
     /// holds the block, else 0 (nothing known). No branch on the answer: callers use it to
     /// rule out voxels that certainly have their miss, many in a row.
+    ///
     /// The mask is the cache's copy (see [`FrameState::missed_copy`]), which lives in
     /// the cache's own cache lines, not the block's.
     #[inline(always)]
