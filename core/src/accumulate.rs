@@ -164,22 +164,38 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         *acc = Accumulator::NONE;
     }
 
-    /// One vote for `class` by a point in accumulator `a`'s voxel, counted in the
-    /// accumulator while its class stays the same (see [`Accumulator::votes`]).
+    /// One point with [`packed_offsets`] `w` into accumulator `a` (see
+    /// [`Map::add_to_accumulator`]), and its vote for `class` (0: none), which the
+    /// accumulator counts while its class stays the same (see [`Accumulator::votes`]).
     #[inline(always)]
-    pub(crate) fn vote_in_accumulator(&mut self, f: &mut FrameState, a: usize, class: u8) {
+    pub(crate) fn add_voting_point(
+        &mut self,
+        f: &mut FrameState,
+        a: usize,
+        w: &[u64; 3],
+        class: u8,
+    ) {
         let Some(acc) = f.acc.get_mut(a) else {
             return;
         };
         let (pending, count) = acc.votes;
-        if pending == class || count == 0 {
-            acc.votes = (class, count + 1);
-        } else {
-            if let Some(v) = self.voxels.slots.get_mut(acc.slot) {
-                v.take_votes(pending, count);
+        if class != 0 {
+            if pending == class || count == 0 {
+                acc.votes = (class, count + 1);
+            } else {
+                if let Some(v) = self.voxels.slots.get_mut(acc.slot) {
+                    v.take_votes(pending, count);
+                }
+                acc.votes = (class, 1);
             }
-            acc.votes = (class, 1);
         }
+        if acc.sums.n >= PackedSums::MAX_POINTS {
+            if let Some(v) = self.voxels.slots.get_mut(acc.slot) {
+                v.merge(&acc.sums.unbias());
+            }
+            acc.sums = PackedSums::EMPTY;
+        }
+        acc.sums.add(w, 1);
     }
 
     /// A point at world position `w`, `range` metres from the sensor, beyond max range:

@@ -161,10 +161,12 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 dropped += 1;
                 continue;
             }
-            if batch.votes_in(j, vote_key_max) {
-                self.vote_in_accumulator(f, acc, batch.vote[j]);
-            }
-            self.add_to_accumulator(f, acc, &w, 1);
+            let class = if batch.votes_in(j, vote_key_max) {
+                batch.vote[j]
+            } else {
+                0
+            };
+            self.add_voting_point(f, acc, &w, class);
             used += 1;
         }
         f.report.points_used += used;
