@@ -113,9 +113,14 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         w: &[u64; 3],
         n: u32,
     ) {
-        let Some(acc) = f.acc.get_mut(a) else {
-            return;
-        };
+        if let Some(acc) = f.acc.get_mut(a) {
+            self.add_sums(acc, w, n);
+        }
+    }
+
+    /// [`Map::add_to_accumulator`] for the accumulator itself.
+    #[inline(always)]
+    fn add_sums(&mut self, acc: &mut Accumulator, w: &[u64; 3], n: u32) {
         if acc.sums.n + n > PackedSums::MAX_POINTS {
             if let Some(v) = self.voxels.slots.get_mut(acc.slot) {
                 v.merge(&acc.sums.unbias());
@@ -189,13 +194,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 acc.votes = (class, 1);
             }
         }
-        if acc.sums.n >= PackedSums::MAX_POINTS {
-            if let Some(v) = self.voxels.slots.get_mut(acc.slot) {
-                v.merge(&acc.sums.unbias());
-            }
-            acc.sums = PackedSums::EMPTY;
-        }
-        acc.sums.add(w, 1);
+        self.add_sums(acc, w, 1);
     }
 
     /// A point at world position `w`, `range` metres from the sensor, beyond max range:
