@@ -187,15 +187,15 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let lane = |l: usize| segments.get(l).copied().unwrap_or_default();
         let walks: [Dda; LANES] = core::array::from_fn(|l| lane(l).dda());
         let start = core::array::from_fn(|l| key_of(lane(l).start).packed());
-        let limit = core::array::from_fn(|l| {
-            segments
-                .get(l)
-                .filter(|seg| lanes(seg))
-                .map_or(0, Segment::steps)
+        let in_lanes: [bool; LANES] = core::array::from_fn(|l| segments.get(l).is_some_and(lanes));
+        let limit = core::array::from_fn(|l| match in_lanes[l] {
+            true => lane(l).steps(),
+            false => 0,
         });
         let steps = lane_keys(&walks, start, limit, T_END, &mut pending.keys);
-        for ((l, seg), &n) in segments.iter().enumerate().zip(&steps) {
-            if lanes(seg) {
+        let taken = segments.iter().zip(in_lanes).zip(&steps).enumerate();
+        for (l, ((seg, in_lanes), &n)) in taken {
+            if in_lanes {
                 let keys = pending.keys.get(..=n as usize).unwrap_or(&[]);
                 self.walk_keys(f, cache, seg, (keys, l), &mut pending.todo);
             } else {
