@@ -46,6 +46,9 @@ pub(crate) const NO_DEPTH: u8 = 3;
 /// packs them itself ([`Batch::packed`]); the conversion then leaves the 64-bit lanes.
 pub(crate) const PACK_PER_POINT: bool = cfg!(target_pointer_width = "32");
 
+/// Entries of [`Batch::vote_key`]: none where points are packed one by one.
+const VOTE_KEYS: usize = if PACK_PER_POINT { 0 } else { BATCH };
+
 /// One batch of points in structure-of-arrays form.
 pub(crate) struct Batch {
     pub(crate) len: usize,
@@ -71,9 +74,9 @@ pub(crate) struct Batch {
     /// in a voxel if `vote_key <= vote_max >> 1` ([`Accumulator::vote_key_max`]), which
     /// is `hash <= vote_max` (`vote_max` is `2^k - 1`) for the points with a class and
     /// never true for the others. Not kept on targets that accumulate point by point
-    /// ([`PACK_PER_POINT`]): they find a point's vote key only when its voxel samples
-    /// votes ([`Batch::votes_in`]).
-    pub(crate) vote_key: [u32; BATCH],
+    /// ([`PACK_PER_POINT`]; the array is empty there): they find a point's vote key
+    /// only when its voxel samples votes ([`Batch::votes_in`]).
+    pub(crate) vote_key: [u32; VOTE_KEYS],
     pub(crate) status: [u8; BATCH],
 }
 
@@ -117,7 +120,7 @@ impl Batch {
             source: Source::POINTS,
             from_depth: false,
             vote: [0; BATCH],
-            vote_key: [u32::MAX; BATCH],
+            vote_key: [u32::MAX; VOTE_KEYS],
             status: [FAST; BATCH],
         }
     }
@@ -424,13 +427,16 @@ impl Batch {
             let voting = voting_classes(&l, config);
             let vote = voting.first().copied().unwrap_or(0);
             self.vote[j] = vote;
-            self.vote_key[j] = if PACK_PER_POINT {
-                u32::MAX // see `votes_in`
-            } else if vote != 0 {
-                vote_hash(&self.point(j)) >> 1
-            } else {
-                u32::MAX
-            };
+            if !PACK_PER_POINT {
+                let key = if vote != 0 {
+                    vote_hash(&self.point(j)) >> 1
+                } else {
+                    u32::MAX
+                };
+                if let Some(k) = self.vote_key.get_mut(j) {
+                    *k = key;
+                }
+            }
             if self.status[j] == FAST {
                 if !l.fits(classes) {
                     self.status[j] = BAD_LABEL;
