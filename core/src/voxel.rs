@@ -144,21 +144,39 @@ impl PackedSums {
 
     /// The exact `n, S1, S2` of the points added: `sum q = sum u - 32 n` and
     /// `sum q_i q_j = sum u_i u_j - 32 (sum u_i + sum u_j) + 1024 n`.
+    #[inline]
     pub(crate) fn unbias(&self) -> PointSums {
         let field = |w: u64, i: u32| ((w >> (i * FIELD_BITS)) & FIELD_MASK) as i64;
         let n = self.n as i64;
-        let u = [0, 1, 2].map(|i| field(self.w[0], i));
-        let uu = [(1, 0), (1, 1), (1, 2), (2, 0), (2, 1), (2, 2)].map(|(w, i)| field(self.w[w], i));
-        let pairs = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
-        let mut s2 = [0i32; 6];
-        for (k, (i, j)) in pairs.into_iter().enumerate() {
-            let v = uu[k] - OFFSET_BIAS * (u[i] + u[j]) + OFFSET_BIAS * OFFSET_BIAS * n;
-            s2[k] = v as i32;
-        }
+        let [w0, w1, w2] = self.w;
+        let u = [field(w0, 0), field(w0, 1), field(w0, 2)];
+        let uu = [
+            field(w1, 0),
+            field(w1, 1),
+            field(w1, 2),
+            field(w2, 0),
+            field(w2, 1),
+            field(w2, 2),
+        ];
+        // Entry k of S2 is the pair (i, j) of `S2_INDEX`: sum q_i q_j.
+        let s2 = |k: usize, i: usize, j: usize| {
+            (uu[k] - OFFSET_BIAS * (u[i] + u[j]) + OFFSET_BIAS * OFFSET_BIAS * n) as i32
+        };
         PointSums {
             n: self.n,
-            s1: u.map(|u| (u - OFFSET_BIAS * n) as i32),
-            s2,
+            s1: [
+                (u[0] - OFFSET_BIAS * n) as i32,
+                (u[1] - OFFSET_BIAS * n) as i32,
+                (u[2] - OFFSET_BIAS * n) as i32,
+            ],
+            s2: [
+                s2(0, 0, 0),
+                s2(1, 0, 1),
+                s2(2, 0, 2),
+                s2(3, 1, 1),
+                s2(4, 1, 2),
+                s2(5, 2, 2),
+            ],
         }
     }
 }
