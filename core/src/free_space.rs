@@ -48,6 +48,7 @@ impl Segment {
     }
 
     /// The steps of its walk: one per voxel boundary between `start` and `end`.
+    #[inline]
     fn steps(&self) -> u32 {
         (0..3)
             .map(|a| (self.end[a] - self.start[a]).unsigned_abs())
@@ -56,11 +57,13 @@ impl Segment {
 
     /// Whether the walk may leave the key range: overshooting the end by a few voxels
     /// stays in range unless an end is near its limit.
+    #[inline]
     fn near_limit(&self) -> bool {
         (self.start.iter().chain(&self.end)).any(|c| c.unsigned_abs() > KEY_LIMIT as u32 - 8)
     }
 
     /// The walk's start: voxel `start`, boundaries along `target - o`.
+    #[inline]
     fn dda(&self) -> Dda {
         let (o, target) = (self.o, self.target);
         Dda::new(o, [0, 1, 2].map(|a| target[a] - o[a]), self.start)

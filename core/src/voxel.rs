@@ -283,6 +283,7 @@ pub(crate) const S2_INDEX: [(usize, usize); 6] = [(0, 0), (0, 1), (0, 2), (1, 1)
 
 /// The scatter matrix `M = n S2 - S1 S1^T` (entries in `S2` order), exact in `i64`: `n` times
 /// the sum of squared deviations from the mean, positive semi-definite for real points.
+#[inline]
 pub(crate) fn scatter(n: i64, s1: &[i64; 3], s2: &[i64; 6]) -> [i64; 6] {
     let mut m = [0i64; 6];
     for (e, (&(i, j), &s)) in m.iter_mut().zip(S2_INDEX.iter().zip(s2.iter())) {
