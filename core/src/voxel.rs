@@ -127,6 +127,19 @@ pub(crate) fn packed_offsets(q: [i32; 3]) -> [u64; 3] {
     ]
 }
 
+/// [`packed_offsets`] in 64-bit lanes: products of zero-extended 32-bit values, one
+/// `pmuludq` each on x86-64, and no interleaving of 32-bit halves.
+#[inline]
+pub(crate) fn packed_offsets_wide(q: [i32; 3]) -> [u64; 3] {
+    let u = q.map(|q| (q + OFFSET_BIAS as i32) as u32 as u64);
+    let pack = |a: u64, b: u64, c: u64| a | (b << FIELD_BITS) | (c << (2 * FIELD_BITS));
+    [
+        pack(u[0], u[1], u[2]),
+        pack(u[0] * u[0], u[0] * u[1], u[0] * u[2]),
+        pack(u[1] * u[1], u[1] * u[2], u[2] * u[2]),
+    ]
+}
+
 impl PackedSums {
     /// Most points before a field could overflow: `511 * 4096 < 2^21`.
     pub(crate) const MAX_POINTS: u32 = 511;
@@ -320,6 +333,23 @@ mod tests {
     use super::*;
     use crate::testutil::*;
     use crate::*;
+
+    /// Both ways of packing a point's offsets agree on every offset a point can have
+    /// (`|q| <= 32`), and the fields hold `u = q + 32` and its products.
+    #[test]
+    fn packed_offsets_wide_is_packed_offsets() {
+        for x in -32..=32 {
+            for y in -32..=32 {
+                for z in -32..=32 {
+                    let w = packed_offsets([x, y, z]);
+                    assert_eq!(packed_offsets_wide([x, y, z]), w, "{x} {y} {z}");
+                    let (ux, uz) = ((x + 32) as u64, (z + 32) as u64);
+                    assert_eq!(w[0] & FIELD_MASK, ux);
+                    assert_eq!(w[2] >> (2 * FIELD_BITS), uz * uz);
+                }
+            }
+        }
+    }
 
     #[test]
     fn packed_sums_unbias_to_the_exact_sums() {
