@@ -89,6 +89,7 @@ pub(crate) const LANE_STEPS: usize = if cfg!(target_pointer_width = "64") {
 /// comparisons and bit masks and no branch, and the compiler runs the lanes in vector
 /// registers. The arithmetic is the scalar walk's (the same additions in the same order),
 /// so the voxels are the same.
+#[inline]
 pub(crate) fn lane_keys(
     walks: &[Dda; LANES],
     start: [u64; LANES],
