@@ -875,7 +875,7 @@ mod tests {
             }
             (f.report, snapshot(&map))
         }
-        for seed in [1, 2, 3] {
+        fn check_seed(seed: u64) {
             let checked = run::<4096>(Walk::Checked, seed);
             assert_eq!(checked.0.dropped_misses, 0);
             for how in [Walk::Scalar, Walk::Cast] {
@@ -889,6 +889,15 @@ mod tests {
                 assert!(got == checked, "seed {seed}, full map, {}", how as u8);
             }
         }
+        // A debug build moves the ~0.9 MB map through its stack more than once (about
+        // 2 MB in all, the default test thread's whole stack): run on a thread with room.
+        let body = || {
+            for seed in [1, 2, 3] {
+                check_seed(seed);
+            }
+        };
+        let with_room = std::thread::Builder::new().stack_size(16 << 20);
+        with_room.spawn(body).unwrap().join().unwrap();
     }
 
     /// The packed block key and cell of a packed voxel key are those of the voxel key.
