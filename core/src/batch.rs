@@ -20,7 +20,7 @@ use crate::key::KEY_LIMIT;
 use crate::labels::{LabeledPoint, Labels};
 use crate::sqrt::sqrt;
 use crate::votes::{vote_hash, voting_classes};
-use crate::voxel::{packed_offsets, packed_offsets_wide};
+use crate::voxel::packed_offsets;
 
 /// Points per batch: large enough that the per-batch work vanishes, small enough for a
 /// microcontroller's stack (a batch is about 4 KiB).
@@ -406,7 +406,7 @@ impl Batch {
         } = self;
         for j in 0..BATCH {
             key[j] = ((key_x[j] as u64) << 32) | key_yz[j] as u64;
-            let w = packed_offsets_wide([offsets[0][j], offsets[1][j], offsets[2][j]]);
+            let w = packed_offsets([offsets[0][j], offsets[1][j], offsets[2][j]]);
             for (axis, wi) in sums.iter_mut().zip(w) {
                 axis[j] = wi;
             }
