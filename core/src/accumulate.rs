@@ -80,15 +80,18 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             None
         };
         let vs = match vs {
-            Some(vs) => vs,
+            Some(vs) => {
+                // A new voxel's histogram is empty: room enough.
+                self.voxels
+                    .get_mut(vs)?
+                    .make_vote_room(self.config.votes_per_frame);
+                vs
+            }
             None => self.create_voxel(f, key)?,
         };
         let b = self.blocks.get_mut(bs)?;
         b.hit |= bit;
         b.surface |= bit;
-        self.voxels
-            .get_mut(vs)?
-            .make_vote_room(self.config.votes_per_frame);
         Some(vs)
     }
 

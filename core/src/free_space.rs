@@ -416,9 +416,9 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     /// The miss of cell `cell` of the block with packed key `block` (in slot `bs`,
-    /// without a miss yet this frame) for the segment `seg`. The voxel's key is built only when its
-    /// Gaussian is needed.
-    #[cfg_attr(target_pointer_width = "64", inline(always))]
+    /// without a miss yet this frame) for the segment `seg`: the constant miss, or
+    /// [`Map::surface_miss`] for a voxel on the surface.
+    #[inline(always)]
     fn miss(
         &mut self,
         f: &mut FrameState,
@@ -427,26 +427,18 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         (block, cell): (u64, u32),
         bs: usize,
     ) {
-        let bit = 1u64 << (cell & 63);
-        let cfg = &self.config;
-        let mut delta = f.miss;
         let Some(surface) = self.blocks.get(bs).map(|b| b.surface) else {
             return;
         };
-        if surface & bit != 0 && cfg.miss_model == MissModel::NdtOm {
-            let found = self
-                .voxels
-                .find(VoxelKey::from_block_cell(block, cell).packed());
-            if let Some((vs, v)) = found.and_then(|vs| Some((vs, self.voxels.get(vs)?))) {
-                if v.n >= cfg.n_min {
-                    let g = cache.get(vs, || v.prepared(cfg));
-                    match ndt_om_miss(cfg, &seg.ray(f), &g) {
-                        Some(l) => delta = to_fixed(l),
-                        None => return,
-                    }
-                }
+        let delta = if has_cell(surface, cell) && self.config.miss_model == MissModel::NdtOm {
+            match self.surface_miss(f, cache, seg, VoxelKey::from_block_cell(block, cell)) {
+                Some(delta) => delta,
+                None => return,
             }
-        }
+        } else {
+            f.miss
+        };
+        let bit = 1u64 << (cell & 63);
         let (lo, hi) = f.clamp;
         if let Some(b) = self.blocks.get_mut(bs) {
             b.missed |= bit;
@@ -454,6 +446,30 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         }
         if LANES_PAY {
             Self::note_missed(f, block, bit);
+        }
+    }
+
+    /// The NDT-OM miss (fixed point) of voxel `key`, on the surface, for the segment `seg`:
+    /// weighted by its Gaussian when it has a valid one, else the constant miss; `None`
+    /// when the ray ends before its closest approach. Out of line on 32-bit targets: few
+    /// misses need it, and its floating point would make every miss save registers.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
+    #[cfg_attr(not(target_pointer_width = "64"), inline(never))]
+    fn surface_miss(
+        &self,
+        f: &FrameState,
+        cache: &mut GaussCache,
+        seg: &Segment,
+        key: VoxelKey,
+    ) -> Option<i32> {
+        let cfg = &self.config;
+        let found = self.voxels.find(key.packed());
+        match found.and_then(|vs| Some((vs, self.voxels.get(vs)?))) {
+            Some((vs, v)) if v.n >= cfg.n_min => {
+                let g = cache.get(vs, || v.prepared(cfg));
+                ndt_om_miss(cfg, &seg.ray(f), &g).map(to_fixed)
+            }
+            _ => Some(f.miss),
         }
     }
 }
