@@ -277,7 +277,7 @@ impl<const C: usize> Voxel<C> {
             for (&(i, j), &v) in S2_INDEX.iter().zip(m.iter()) {
                 // Decay's rounding can leave a flat direction a hair below zero.
                 let v = if i == j { v.max(0) } else { v };
-                let f = v as f32 * scale;
+                let f = to_f32(v) * scale;
                 cov[(i, j)] = f;
                 cov[(j, i)] = f;
             }
@@ -293,6 +293,28 @@ impl<const C: usize> Voxel<C> {
     pub(crate) fn prepared(&self, cfg: &Config) -> Prepared {
         self.gaussian(cfg.cell_size, cfg.quant_step())
             .prepare(cfg.eigen_ratio, floor_abs(cfg.cell_size))
+    }
+}
+
+/// `v as f32`: through `i32` on 32-bit targets, where converting an `i64` is a software
+/// call (`__aeabi_l2f`, about 30 instructions on a Cortex-M4).
+#[inline(always)]
+fn to_f32(v: i64) -> f32 {
+    if cfg!(target_pointer_width = "32") {
+        to_f32_via_i32(v)
+    } else {
+        v as f32
+    }
+}
+
+/// `v as f32`, by one hardware `i32` conversion when `v` fits in `i32` (the same value, so
+/// the same rounding; the scatter of a voxel with few points is small). `black_box`
+/// keeps the compiler from folding that conversion back into the `i64` one.
+#[inline(always)]
+fn to_f32_via_i32(v: i64) -> f32 {
+    match i32::try_from(v) {
+        Ok(small) => core::hint::black_box(small) as f32,
+        Err(_) => v as f32,
     }
 }
 
@@ -338,6 +360,36 @@ mod tests {
     use super::*;
     use crate::testutil::*;
     use crate::*;
+
+    /// The conversion through `i32` (used on 32-bit targets) rounds as `as f32` does, on
+    /// both sides of the `i32` range, at the edges of f32's exact integers and on a sweep.
+    #[test]
+    fn to_f32_via_i32_is_as_f32() {
+        let edges = [
+            0,
+            1,
+            -1,
+            16_777_217,
+            -16_777_217,
+            33_554_435,
+            i32::MAX as i64,
+        ];
+        let edges = edges.into_iter().flat_map(|v| [v, -v, v + 1, v - 1]);
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        let sweep = core::iter::from_fn(|| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            // Magnitudes from 2^9 to 2^40: small scatters and ones past `i32`.
+            Some((x as i64) >> (23 + (x >> 59)))
+        });
+        for v in edges
+            .chain([i32::MIN as i64, i64::MIN, i64::MAX])
+            .chain(sweep.take(100_000))
+        {
+            assert_eq!(to_f32_via_i32(v).to_bits(), (v as f32).to_bits(), "{v}");
+        }
+    }
 
     /// Both ways of packing a point's offsets agree on every offset a point can have
     /// (`|q| <= 32`), and the fields hold `u = q + 32` and its products.
