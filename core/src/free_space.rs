@@ -261,12 +261,14 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
 
     /// The traversal of [`traverse`] (same voxels, same order), specialised for misses,
     /// for a segment that stays in the key range. The walk keeps only what a step needs
-    /// in registers: the cell index in the current block, the block's `missed` mask, and
-    /// per axis the boundary parameter. A voxel that already has its miss (most visits:
-    /// the rays of a frame share their start) costs one bit test and one step; the voxel
-    /// key is rebuilt from block and cell only for a miss and at the end. The end voxel
-    /// can only be reached with the last of the `|end - start|_1` steps, so the loop
-    /// counts steps instead of comparing keys.
+    /// in registers: the cell index in the current block, the block's `missed` mask and
+    /// the word of it that holds the cell's bit ([`mask_word`]), and per axis the boundary
+    /// parameter. A voxel that already has its miss (most visits: the rays of a frame
+    /// share their start) costs one bit test and one step; the voxel key is rebuilt from
+    /// block and cell only for a miss and at the end. The end voxel can only be reached
+    /// with the last of the `|end - start|_1` steps, so the loop counts steps instead of
+    /// comparing keys. Each axis steps with its own constants, so a step inside the block
+    /// is one addition.
     ///
     /// The cell index is kept "in the direction of travel": the 2-bit field of an axis
     /// walked downwards holds `3 - x` (`flip` has those fields set), so every step adds
@@ -291,11 +293,15 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let mut walked = key.cell() ^ flip;
         let mut remaining = seg.steps();
         let (mut at, mut missed) = self.enter_block(f, block);
+        let mut word = mask_word(missed, walked ^ flip);
         loop {
             let cell = walked ^ flip;
-            if !has_cell(missed, cell) {
+            if !has_bit(word, cell) {
                 match self.walk_visit(f, cache, seg, at, (block, cell), remaining == 0) {
-                    Some(m) => missed = m,
+                    Some(m) => {
+                        missed = m;
+                        word = mask_word(m, cell);
+                    }
                     None => return,
                 }
             }
@@ -310,28 +316,33 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             if (if z { t2 } else { t01 }) > T_END {
                 return;
             }
-            let axis = if z {
+            let (field, step) = if z {
                 t2 += d2;
-                2
+                if walked & Z_FIELD != Z_FIELD {
+                    walked += 1 << 4;
+                    word = mask_word(missed, walked ^ flip);
+                    continue;
+                }
+                (Z_FIELD, b2)
             } else if y {
                 t1 += d1;
-                1
+                if walked & Y_FIELD != Y_FIELD {
+                    walked += 1 << 2;
+                    continue;
+                }
+                (Y_FIELD, b1)
             } else {
                 t0 += d0;
-                0
+                if walked & X_FIELD != X_FIELD {
+                    walked += 1;
+                    continue;
+                }
+                (X_FIELD, b0)
             };
-            let field = X_FIELD << (2 * axis);
-            if walked & field != field {
-                walked += 1 << (2 * axis);
-            } else {
-                walked &= !field;
-                block = block.wrapping_add(match axis {
-                    0 => b0,
-                    1 => b1,
-                    _ => b2,
-                });
-                (at, missed) = self.enter_block(f, block);
-            }
+            walked &= !field;
+            block = block.wrapping_add(step);
+            (at, missed) = self.enter_block(f, block);
+            word = mask_word(missed, walked ^ flip);
         }
     }
 
@@ -591,6 +602,24 @@ fn has_cell(mask: u64, cell: u32) -> bool {
         };
         (half >> (cell & 31)) & 1 != 0
     }
+}
+
+/// The word of block mask `mask` that holds the bit of cell `cell`: the whole mask on
+/// 64-bit targets; on 32-bit ones its 32-bit half, which changes only with the cell's z
+/// (cells 32..64 have z >= 2), so a walk picks it again only on z steps.
+#[inline(always)]
+fn mask_word(mask: u64, cell: u32) -> usize {
+    if cfg!(target_pointer_width = "64") || cell & 32 == 0 {
+        mask as usize
+    } else {
+        (mask >> 32) as usize
+    }
+}
+
+/// Whether the bit of cell `cell` is set in `word`, from [`mask_word`].
+#[inline(always)]
+fn has_bit(word: usize, cell: u32) -> bool {
+    (word >> (cell as usize & (usize::BITS as usize - 1))) & 1 != 0
 }
 
 /// The 2-bit fields of the x, y and z coordinates in a block's cell index.
