@@ -313,8 +313,21 @@ impl Batch {
 
     /// World coordinates, voxel keys, offsets, vote keys and the status of every loaded point, for
     /// a map with `classes` classes (a vote above is a bad label; votes set later are
-    /// checked when they are set).
+    /// checked when they are set). Keys are checked against the key range only when the
+    /// frame's sensor is near its edge (`FrameState::keys_in_range`): a point within max
+    /// range of it cannot leave the range otherwise (on a Cortex-M4F, the checks cost about 7
+    /// instructions per point).
     pub(crate) fn convert(&mut self, f: &FrameState, classes: usize) {
+        if f.keys_in_range {
+            self.convert_checking::<false>(f, classes);
+        } else {
+            self.convert_checking::<true>(f, classes);
+        }
+    }
+
+    /// [`Batch::convert`], checking every key against the key range if `CHECK_KEYS`.
+    #[inline(always)]
+    fn convert_checking<const CHECK_KEYS: bool>(&mut self, f: &FrameState, classes: usize) {
         // What the loops read, in locals, and the batch split into its arrays: stores
         // into the batch then cannot change what the loops read, and the compiler
         // vectorises without run-time overlap checks. The loops run over every lane (a
@@ -363,7 +376,9 @@ impl Batch {
                 // max range, whose |t| is below 2^22 (see `floor_and_half`); other points
                 // are not fast anyway.
                 let key = m >> quant_bits;
-                fast &= (key + KEY_LIMIT) as u32 <= 2 * KEY_LIMIT as u32;
+                if CHECK_KEYS {
+                    fast &= (key + KEY_LIMIT) as u32 <= 2 * KEY_LIMIT as u32;
+                }
                 k[i] = (key + 32768) as u32 & 0xffff;
                 q[i] = (m & quant_mask) - qhalf + half_up as i32;
             }
@@ -528,8 +543,65 @@ fn floor_and_half_by_magic(t: f32) -> (i32, bool) {
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
+
     use super::*;
     use crate::key::floor_i32;
+    use crate::labels::LabeledPoint;
+    use crate::Map;
+    use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
+
+    /// A frame that skips the key range check (`keys_in_range`) cannot put a point within
+    /// max range outside the range: sensors just inside the zone where it skips, with the
+    /// most scaled rotation a pose may have, and points at max range towards the nearest
+    /// edge get the keys the checked path gives them, all in range. A sensor a voxel
+    /// nearer the edge is checked.
+    #[test]
+    fn unchecked_keys_stay_in_range() {
+        for cell in [0.1f32, 0.013] {
+            let mut cfg = Config::with_cell_size(cell);
+            cfg.max_range = Config::MAX_RAY_CELLS as f32 * cell;
+            let mut map: std::boxed::Box<Map<64, 16, 4>> = std::boxed::Box::new(Map::new(cfg));
+            let reach = Config::MAX_RAY_CELLS as f32 * 1.01 + 2.0;
+            let zone_edge = (KEY_LIMIT as f32 - reach) * cell;
+            // A quaternion 0.05 % longer than a unit one (a rotation scaled by 1.001).
+            let turn = UnitQuaternion::from_euler_angles(0.3, -0.2, 0.7).into_inner();
+            let rotation = UnitQuaternion::new_unchecked(turn * 1.000_499);
+            for axis in 0..3 {
+                for sign in [1.0f32, -1.0] {
+                    let mut o = Vector3::zeros();
+                    o[axis] = sign * (zone_edge - 0.5 * cell);
+                    let pose = Isometry3::from_parts(Translation3::from(o), rotation);
+                    let f = map.begin_frame(&pose).unwrap();
+                    assert!(f.keys_in_range, "cell {cell}, axis {axis}, sign {sign}");
+                    // Points at max range in the sensor frame, towards the edge in the world.
+                    let mut towards = Vector3::zeros();
+                    towards[axis] = sign;
+                    let d = turn.conjugate() * Quaternion::from_imag(towards) * turn;
+                    let points: std::vec::Vec<LabeledPoint> = [0.999_99f32, 0.99, 0.5]
+                        .iter()
+                        .map(|k| {
+                            let p = d.imag() * (k * cfg.max_range);
+                            crate::testutil::lp(p.x, p.y, p.z, 1)
+                        })
+                        .collect();
+                    let mut batch = Batch::new();
+                    batch.load_points(&points);
+                    batch.convert(&f, 4);
+                    for (j, lp) in points.iter().enumerate() {
+                        let p = [lp.position.x, lp.position.y, lp.position.z];
+                        let (key, _) = f.quantise(&f.to_world(&p)).expect("in range");
+                        assert_eq!(batch.status[j], FAST, "cell {cell}, axis {axis}, {j}");
+                        assert_eq!(batch.packed(j).0, key.packed());
+                    }
+                    let mut nearer = o;
+                    nearer[axis] += sign * cell;
+                    let pose = Isometry3::from_parts(Translation3::from(nearer), rotation);
+                    assert!(!map.begin_frame(&pose).unwrap().keys_in_range);
+                }
+            }
+        }
+    }
 
     #[test]
     fn floor_and_half_match_the_scalar_path_on_the_key_range() {

@@ -179,6 +179,10 @@ pub(crate) struct FrameState {
     pub(crate) qscale: f32,
     pub(crate) qhalf: i32,
     pub(crate) max_range: f32,
+    /// Whether every point within max range of the sensor has its voxel in the key range,
+    /// so that phase 1 need not check its key (true unless the sensor is within max range
+    /// of the key range's edge; see [`keys_in_range`]).
+    pub(crate) keys_in_range: bool,
     /// The constant miss and the log-odds clamps in fixed point.
     pub(crate) miss: i32,
     pub(crate) clamp: (i32, i32),
@@ -266,6 +270,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             qscale,
             qhalf: 1 << (self.config.quant_bits - 1),
             max_range: self.config.max_range,
+            keys_in_range: keys_in_range(&origin_s, self.config.max_range * inv_h),
             miss: to_fixed(self.config.miss),
             clamp: (
                 to_fixed(self.config.clamp_min),
@@ -461,6 +466,14 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         f.report.blocks_evicted = (self.stats.blocks_evicted - f.evicted_before.1) as u32;
         f.report
     }
+}
+
+/// Whether every point within `range` voxels of the sensor at `s` (voxel units) is in
+/// the key range, with room for a pose whose rotation is up to 0.1 % off unit length (as
+/// `validate_pose` allows) and for rounding: 1 % and two voxels.
+fn keys_in_range(s: &[f32; 3], range: f32) -> bool {
+    let reach = range * 1.01 + 2.0;
+    s.iter().all(|s| s.abs() + reach < KEY_LIMIT as f32)
 }
 
 /// The key of the sensor's voxel from its position in voxel units, or `None` outside the
