@@ -592,16 +592,7 @@ fn ndt_om_miss(cfg: &Config, ray: &Ray, g: &Prepared) -> Option<f32> {
 /// 32-bit half, not a 64-bit shift.
 #[inline(always)]
 fn has_cell(mask: u64, cell: u32) -> bool {
-    if cfg!(target_pointer_width = "64") {
-        (mask >> (cell & 63)) & 1 != 0
-    } else {
-        let half = if cell & 32 != 0 {
-            (mask >> 32) as u32
-        } else {
-            mask as u32
-        };
-        (half >> (cell & 31)) & 1 != 0
-    }
+    has_bit(mask_word(mask, cell), cell)
 }
 
 /// The word of block mask `mask` that holds the bit of cell `cell`: the whole mask on
