@@ -562,7 +562,7 @@ mod tests {
             let mut cfg = Config::with_cell_size(cell);
             cfg.max_range = Config::MAX_RAY_CELLS as f32 * cell;
             let mut map: std::boxed::Box<Map<64, 16, 4>> = std::boxed::Box::new(Map::new(cfg));
-            let reach = Config::MAX_RAY_CELLS as f32 * 1.01 + 2.0;
+            let reach = crate::frame::key_reach(Config::MAX_RAY_CELLS as f32);
             let zone_edge = (KEY_LIMIT as f32 - reach) * cell;
             // A quaternion 0.05 % longer than a unit one (a rotation scaled by 1.001).
             let turn = UnitQuaternion::from_euler_angles(0.3, -0.2, 0.7).into_inner();

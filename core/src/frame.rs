@@ -469,11 +469,17 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
 }
 
 /// Whether every point within `range` voxels of the sensor at `s` (voxel units) is in
-/// the key range, with room for a pose whose rotation is up to 0.1 % off unit length (as
-/// `validate_pose` allows) and for rounding: 1 % and two voxels.
+/// the key range: the sensor is more than [`key_reach`] voxels from the range's edge.
 fn keys_in_range(s: &[f32; 3], range: f32) -> bool {
-    let reach = range * 1.01 + 2.0;
-    s.iter().all(|s| s.abs() + reach < KEY_LIMIT as f32)
+    s.iter()
+        .all(|s| s.abs() + key_reach(range) < KEY_LIMIT as f32)
+}
+
+/// How far (voxels) from the sensor a point within `range` voxels may get its key, with
+/// room for a pose whose rotation is up to 0.1 % off unit length (as `validate_pose`
+/// allows) and for rounding: 1 % and two voxels.
+pub(crate) fn key_reach(range: f32) -> f32 {
+    range * 1.01 + 2.0
 }
 
 /// The key of the sensor's voxel from its position in voxel units, or `None` outside the
