@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
-# Runs sndt-core's tests (unit, property, doc) and the cross-architecture CRC check
-# (tests/tests/crosscheck.rs) for aarch64-unknown-linux-gnu under qemu-aarch64, and checks
-# that the aarch64 snapshot CRC of the test vector and the CRC of the view rendered from its
-# map equal the committed ones (targets/cortex-m4f/vector/expected_crc.txt and
-# expected_render_crc.txt), as on x86-64 and the Cortex-M4F firmware.
+# Runs sndt-core's tests (unit, property, doc) for aarch64-unknown-linux-gnu under
+# qemu-aarch64, and checks that the aarch64 snapshot CRC of the test vector and the CRC of the
+# view rendered from its map equal the committed ones (targets/cortex-m4f/vector/
+# expected_crc.txt and expected_render_crc.txt), as on x86-64 and the Cortex-M4F firmware.
+# The CRCs come from the C API's vector_crc program (targets/c/examples/vector_crc.c),
+# cross-compiled against libsndt_c.a for aarch64: it integrates the vector through the same
+# core code as the Rust test, and needs only sndt-core built for aarch64, not sndt-host.
 # Installs what it needs when missing (idempotent; fast when everything is present).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -48,20 +50,23 @@ if [ -z "$doctests" ] || [ "$doctests" -eq 0 ]; then
     exit 1
 fi
 
-step "cross-architecture CRC check on $TARGET (tests/tests/crosscheck.rs)"
-# This test links sndt-host and all its dependencies (HDF5, PNG, plots, CLI), which take
-# minutes to optimise for aarch64; only the map code matters here, so third-party crates
-# are built unoptimised (their arithmetic, e.g. libm's, is IEEE-exact at any level).
-cargo test -p sndt-tests --test crosscheck --target "$TARGET" \
-    --config 'profile.test.package."*".opt-level=0' -- --nocapture 2>&1 | tee -a "$log"
+step "cross-architecture CRCs on $TARGET: the C API's vector_crc under qemu-aarch64"
+# libsndt_c.a for aarch64 (release, as a C project links it), then the C program against it.
+C_DIR=targets/c
+(cd "$C_DIR" && cargo build --release --locked --quiet --target "$TARGET")
+prog="$C_DIR/target/$TARGET/vector_crc"
+aarch64-linux-gnu-gcc -std=c99 -O2 -Wall -Wextra -Werror -pedantic -I"$C_DIR/include" \
+    "$C_DIR/examples/vector_crc.c" "$C_DIR/target/$TARGET/release/libsndt_c.a" -lm -o "$prog"
+qemu-aarch64 -L /usr/aarch64-linux-gnu "$prog" targets/cortex-m4f/vector/frames.bin | tee -a "$log"
+crc_of() { grep -oE "^$1 crc 0x[0-9a-f]{8}" "$log" | awk '{ print $3 }' | tail -n 1; }
 expected=$(tr -d '[:space:]' <targets/cortex-m4f/vector/expected_crc.txt)
-crc=$(grep -oE 'crosscheck: aarch64 snapshot crc 0x[0-9a-f]{8}' "$log" | awk '{ print $NF }' | tail -n 1)
+crc=$(crc_of snapshot)
 if [ "$crc" != "$expected" ]; then
     echo "error: aarch64 snapshot CRC '${crc:-none}' differs from expected_crc.txt ($expected)" >&2
     exit 1
 fi
 expected_render=$(tr -d '[:space:]' <targets/cortex-m4f/vector/expected_render_crc.txt)
-render=$(grep -oE 'crosscheck: aarch64 render crc 0x[0-9a-f]{8}' "$log" | awk '{ print $NF }' | tail -n 1)
+render=$(crc_of render)
 if [ "$render" != "$expected_render" ]; then
     echo "error: aarch64 render CRC '${render:-none}' differs from expected_render_crc.txt ($expected_render)" >&2
     exit 1

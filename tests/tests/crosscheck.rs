@@ -1,7 +1,8 @@
 //! Cross-architecture check: the committed test vector (`targets/cortex-m4f/vector/`) must
 //! give the committed snapshot CRC on this architecture. `bash scripts/test.sh` runs it on
-//! x86-64 (`cargo test`) and on aarch64 under qemu-aarch64 (`scripts/aarch64.sh`); the
-//! Cortex-M4F firmware checks the same CRC in QEMU (`scripts/firmware.sh`). The same holds
+//! x86-64 (`cargo test`); on aarch64 (`scripts/aarch64.sh`, qemu-aarch64) the C API's
+//! `vector_crc` program checks the same CRCs, and the Cortex-M4F firmware checks them in
+//! QEMU (`scripts/firmware.sh`). The same holds
 //! for the CRC of the 64 x 48 view every target renders from that map
 //! (`expected_render_crc.txt`).
 
@@ -30,7 +31,7 @@ fn committed_crc(name: &str) -> u32 {
 fn committed_vector_gives_the_committed_crc() {
     let (bytes, want) = committed();
     let got = expected_crc(&bytes).expect("integrating the test vector");
-    // Parsed by scripts/aarch64.sh (run with --nocapture).
+    // Shown with --nocapture.
     println!(
         "crosscheck: {} snapshot crc {got:#010x} (expected {want:#010x})",
         std::env::consts::ARCH
@@ -67,7 +68,7 @@ fn committed_vector_renders_the_committed_view() {
     let v = TestVector::parse(&bytes).expect("parsing frames.bin");
     let view = run(&v).expect("integrating the test vector").view;
     let want = committed_crc("expected_render_crc.txt");
-    // Parsed by scripts/aarch64.sh (run with --nocapture).
+    // Shown with --nocapture.
     println!(
         "crosscheck: {} render crc {:#010x} (expected {want:#010x})",
         std::env::consts::ARCH,
