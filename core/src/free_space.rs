@@ -90,8 +90,22 @@ impl Segment {
 }
 
 /// The ray parameter beyond which a walk stops: the end is at 1, and the margin keeps a
-/// walk from stopping one voxel short on rounding.
-const T_END: f32 = 1.0 + 1e-4;
+/// walk from stopping short on rounding.
+///
+/// The margin is wide enough that a free-space walk never meets this stop before its
+/// last step (which ends it anyway), so [`Map::walk`] leaves the check out (three
+/// instructions of each step on a Cortex-M4). Before the last step some axis `a` still
+/// has a boundary to cross towards the end voxel, and the walk's next parameter is at
+/// most that axis's `t_a`. Exactly, `t_a < 1`: the target lies inside the end voxel, at
+/// least 0.01 voxel from its faces ([`mean_in_voxel`], [`centre`]), farther than
+/// `o + d` rounds away from it. The computed `t_a` is the start parameter plus at most
+/// [`Config::MAX_RAY_CELLS`] (4096) additions of `t_delta` (a ray is at most that many
+/// cells long), each rounding by at most `2^-24` of a value near 1; the start and
+/// `t_delta` add a few more such units: at most about `4101 * 2^-24 = 2.5e-4` in all,
+/// below the margin. A test walks random segments of that length and checks that the
+/// stop never fires early. The stop remains for [`voxels_on_segment`]'s segments, which
+/// may be longer.
+const T_END: f32 = 1.0 + 1e-3;
 
 /// Whether rays are walked [`LANES`] at a time: on 64-bit targets, whose out-of-order
 /// cores lose most of a scalar walk's time to mispredicted branches. A Cortex-M has no
@@ -268,7 +282,8 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// block and cell only for a miss and at the end. The end voxel can only be reached
     /// with the last of the `|end - start|_1` steps, so the loop counts steps instead of
     /// comparing keys. Each axis steps with its own constants, so a step inside the block
-    /// is one addition.
+    /// is one addition. The walk ends with its last step: it never reaches the `T_END`
+    /// stop before that (see [`T_END`]).
     ///
     /// The cell index is kept "in the direction of travel": the 2-bit field of an axis
     /// walked downwards holds `3 - x` (`flip` has those fields set), so every step adds
@@ -313,9 +328,6 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             let y = t1 < t0;
             let t01 = if y { t1 } else { t0 };
             let z = t2 < t01;
-            if (if z { t2 } else { t01 }) > T_END {
-                return;
-            }
             let (field, step) = if z {
                 t2 += d2;
                 if walked & Z_FIELD != Z_FIELD {
@@ -934,6 +946,45 @@ mod tests {
         };
         let with_room = std::thread::Builder::new().stack_size(16 << 20);
         with_room.spawn(body).unwrap().join().unwrap();
+    }
+
+    /// The `T_END` stop never fires before the last step of a free-space segment, which
+    /// is at most `MAX_RAY_CELLS` voxels long on each axis (so `walk` leaves it out):
+    /// random segments anywhere in the key range, from any point of the start voxel to a
+    /// target 0.01 to 0.99 voxel inside the end voxel on each axis (as `mean_in_voxel`
+    /// keeps it), each at the longest length on one axis.
+    #[test]
+    fn end_stop_never_fires_before_the_last_step() {
+        let mut rng = Lcg(11);
+        let mut highest = 0.0f32;
+        for i in 0..3000 {
+            let mut r = || rng.next() as f32;
+            let start: [i32; 3] = core::array::from_fn(|_| (r() * 56000.0) as i32 - 28000);
+            let len = Config::MAX_RAY_CELLS as f32;
+            let end: [i32; 3] = core::array::from_fn(|a| {
+                let n = if a == i % 3 { len } else { r() * len };
+                start[a] + if r() < 0.5 { n as i32 } else { -(n as i32) }
+            });
+            let o: [f32; 3] = core::array::from_fn(|a| start[a] as f32 + r());
+            let target: [f32; 3] =
+                core::array::from_fn(|a| end[a] as f32 + (0.01 + 0.98 * r()).clamp(0.01, 0.99));
+            let seg = Segment {
+                o,
+                target,
+                start,
+                end,
+                include_end: false,
+            };
+            let mut dda = seg.dda();
+            for step in 0..seg.steps() {
+                let (a, t) = dda.next_axis();
+                assert!(t <= T_END, "segment {i}, step {step} of {}", seg.steps());
+                highest = highest.max(t);
+                dda.advance(a);
+            }
+        }
+        // The walks came within a hair of the end, where rounding could matter.
+        assert!(highest > 0.999_99, "{highest}");
     }
 
     /// The packed block key and cell of a packed voxel key are those of the voxel key.
