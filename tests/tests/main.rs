@@ -1,6 +1,6 @@
 //! sndt's integration tests, one module per file of this directory, in one test binary:
 //! every file linked into its own binary would compile the map's generic code and link
-//! `sndt-host` once per file (19 times). Run one file's tests with its module name as the
+//! `sndt-host` once per file. Run one file's tests with its module name as the
 //! filter, e.g. `cargo test -p sndt-tests --test integration snapshot::`.
 
 mod bad_input;
