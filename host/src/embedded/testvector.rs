@@ -9,9 +9,10 @@
 //! ```
 //!
 //! and checked with `sndt testvector --check targets/cortex-m4f/vector/frames.bin`. The
-//! firmware (`targets/cortex-m4f`, Cortex-M4F in QEMU), `cargo test` on x86-64 and the same
-//! test on aarch64 (qemu-aarch64) all integrate these frames into a
-//! `Map<4096, 512, 40>` and must arrive at the same CRC: a bit-identical map on every target.
+//! firmware (`targets/cortex-m4f`, Cortex-M4F in QEMU), `cargo test` on x86-64 and the C
+//! API's `vector_crc` program on aarch64 (qemu-aarch64, `scripts/aarch64.sh`) all integrate
+//! these frames into a `Map<4096, 512, 40>` and must arrive at the same CRC: a bit-identical
+//! map on every target.
 //!
 //! Rendering uses only `+ - * /` and `sqrt` (IEEE 754 exact), so regenerating the vector
 //! reproduces the committed bytes (a test checks this).
