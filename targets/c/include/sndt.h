@@ -168,7 +168,7 @@ typedef struct sndt_config {
    */
   uint8_t miss_model;
   /**
-   * Gaussian radius (Mahalanobis) that rays and renders hit. Default 2.0.
+   * Gaussian radius (Mahalanobis) that rays and renders hit. Default 2.5.
    */
   float render_radius;
 } sndt_config;

@@ -37,6 +37,9 @@
 
 mod types;
 
+#[cfg(test)]
+mod mirror_tests;
+
 pub use types::*;
 
 use core::mem::{align_of, size_of};

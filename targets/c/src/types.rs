@@ -97,7 +97,7 @@ pub struct sndt_config {
     pub votes_per_frame: u8,
     /// Free-space model: 0 NDT-OM (default), 1 constant miss.
     pub miss_model: u8,
-    /// Gaussian radius (Mahalanobis) that rays and renders hit. Default 2.0.
+    /// Gaussian radius (Mahalanobis) that rays and renders hit. Default 2.5.
     pub render_radius: f32,
 }
 
