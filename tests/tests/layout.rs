@@ -1,5 +1,6 @@
 //! The repository's shape, checked so it stays readable: no import cycle between the
-//! modules of `sndt-core` or `sndt-host`, no function longer than [`MAX_FN_LINES`] in the
+//! modules of `sndt-core` or `sndt-host`, no host import that points up the host's declared
+//! layers (the table in `host/src/lib.rs`, which `docs/ARCHITECTURE.md` repeats), no function longer than [`MAX_FN_LINES`] in the
 //! core, the host or the firmware, no pointer to a document the repository does not ship,
 //! and a README short enough to read.
 //!
@@ -211,6 +212,123 @@ fn no_import_cycle_between_modules() {
             panic!("{krate}: import cycle {}", cycle.join(" -> "));
         }
     }
+}
+
+/// The host's layers as its crate doc declares them: the top-level module names of each
+/// table row `| N | [`a`], [`b`] | role |`, by layer number.
+fn declared_layers(doc: &str, row_prefix: &str) -> BTreeMap<String, u32> {
+    let mut layers = BTreeMap::new();
+    for line in doc.lines() {
+        let Some(row) = line.trim().strip_prefix(row_prefix) else {
+            continue;
+        };
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        let Some(layer) = cells.first().and_then(|c| c.parse::<u32>().ok()) else {
+            continue;
+        };
+        for name in cells[1].split('`').skip(1).step_by(2) {
+            let name = name.trim_start_matches("host/src/");
+            let name = name.trim_end_matches('/').trim_end_matches(".rs");
+            layers.insert(name.to_string(), layer);
+        }
+    }
+    layers
+}
+
+/// The text from the line `heading` to the next heading line (one starting with `#`
+/// after any `//!`), or to the end.
+fn section<'a>(text: &'a str, heading: &str) -> &'a str {
+    let Some(start) = text.find(heading) else {
+        return "";
+    };
+    let body = &text[start + heading.len()..];
+    let mut end = body.len();
+    let mut at = 0;
+    for line in body.split_inclusive('\n') {
+        if at > 0 && line.trim_start_matches("//!").trim_start().starts_with('#') {
+            end = at;
+            break;
+        }
+        at += line.len();
+    }
+    &body[..end]
+}
+
+/// Imports from a module of a lower layer to one of a higher layer, as
+/// `from -> to (layer a -> b)` lines. Submodules take their top-level module's layer.
+fn upward_imports(
+    graph: &BTreeMap<String, BTreeSet<String>>,
+    layers: &BTreeMap<String, u32>,
+) -> Vec<String> {
+    let layer_of = |m: &str| layers.get(m.split("::").next().unwrap_or(m)).copied();
+    let mut out = Vec::new();
+    for (from, deps) in graph {
+        let Some(a) = layer_of(from) else { continue };
+        for to in deps {
+            match layer_of(to) {
+                Some(b) if b > a => out.push(format!("{from} -> {to} (layer {a} -> {b})")),
+                _ => {}
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn the_layer_check_finds_a_planted_upward_import() {
+    let doc = "//! | layer | modules | role |\n//! | 1 | [`data`] | r |\n//! | 2 | [`eval`], [`out`] | w |\n";
+    let layers = declared_layers(doc, "//! | ");
+    assert_eq!(layers.len(), 3);
+    assert_eq!(layers["out"], 2);
+    let mut g = BTreeMap::new();
+    g.insert(
+        "eval::run".to_string(),
+        BTreeSet::from(["data::read".to_string()]),
+    );
+    g.insert("out".to_string(), BTreeSet::from(["eval".to_string()]));
+    assert!(
+        upward_imports(&g, &layers).is_empty(),
+        "same layer and downward are allowed"
+    );
+    g.insert(
+        "data::read".to_string(),
+        BTreeSet::from(["out".to_string()]),
+    );
+    assert_eq!(
+        upward_imports(&g, &layers),
+        ["data::read -> out (layer 1 -> 2)"]
+    );
+}
+
+#[test]
+fn host_imports_point_down_its_declared_layers() {
+    let src = repo().join("host/src");
+    let lib = std::fs::read_to_string(src.join("lib.rs")).unwrap();
+    let layers = declared_layers(section(&lib, "//! ## Layers"), "//! | ");
+    let graph = import_graph(&src);
+    // Every top-level module has a layer, and nothing else does.
+    let top: BTreeSet<String> = graph
+        .keys()
+        .filter(|m| !m.is_empty() && !m.contains("::"))
+        .cloned()
+        .collect();
+    let declared: BTreeSet<String> = layers.keys().cloned().collect();
+    assert_eq!(
+        declared, top,
+        "host/src/lib.rs: the layer table and the modules differ"
+    );
+    let architecture = std::fs::read_to_string(repo().join("docs/ARCHITECTURE.md")).unwrap();
+    assert_eq!(
+        declared_layers(section(&architecture, "### Host layers"), "| "),
+        layers,
+        "docs/ARCHITECTURE.md states other host layers than host/src/lib.rs"
+    );
+    let up = upward_imports(&graph, &layers);
+    assert!(
+        up.is_empty(),
+        "host imports that point up its layers:\n{}",
+        up.join("\n")
+    );
 }
 
 /// `(file, line, name, lines)` of every function longer than [`MAX_FN_LINES`].

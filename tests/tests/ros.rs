@@ -4,11 +4,11 @@
 
 use sndt_core::Config;
 use sndt_host::dataset::frame::LabelSource;
+use sndt_host::dataset::ros::bag::{Bag, BagOptions};
+use sndt_host::dataset::ros::msgs::{self, Header, TfMessage, TransformStamped};
 use sndt_host::dataset::synthetic::{write_split, SynthOptions, Synthetic};
 use sndt_host::dataset::{open, Dataset, OpenOptions};
-use sndt_host::ros::bag::{Bag, BagOptions};
-use sndt_host::ros::msgs::{self, Header, TfMessage, TransformStamped};
-use sndt_host::ros::write::{
+use sndt_host::output::ros::write::{
     camera_info, camera_transform, frame_time, image, names, write_trajectory, BagWriter,
 };
 use sndt_host::semantic_map::{boxed_map, integrate_frame, HostMap};
@@ -187,7 +187,7 @@ fn bad_bags_say_what_and_where_and_keep_the_usable_frames() {
 /// shifted by 100 (to be mapped back), stamps in reverse order in the file, a declared but
 /// empty topic, and returns the path.
 fn posed_bag(dir: &std::path::Path, s: &Synthetic, odometry: bool) -> PathBuf {
-    use sndt_host::ros::msgs::Pose;
+    use sndt_host::dataset::ros::msgs::Pose;
     let path = dir.join(if odometry { "odom.mcap" } else { "pose.mcap" });
     let mut bag = BagWriter::create(&path).unwrap();
     bag.add_topic(names::DEPTH, msgs::definitions::image())
@@ -256,7 +256,7 @@ fn posed_bag(dir: &std::path::Path, s: &Synthetic, odometry: bool) -> PathBuf {
 
 /// `pose` on `/pose`: an Odometry of `base_link` or a PoseStamped, both in the world.
 fn write_pose(bag: &mut BagWriter, stamp: msgs::Time, pose: msgs::Pose, odometry: bool) {
-    use sndt_host::ros::msgs::{
+    use sndt_host::dataset::ros::msgs::{
         Odometry, PoseStamped, PoseWithCovariance, Twist, TwistWithCovariance,
     };
     let world = Header {
@@ -385,9 +385,9 @@ fn pose_topics_label_maps_and_unordered_stamps_give_the_same_frames() {
 
 #[test]
 fn sndt_map_writes_a_growing_map_bag_per_trajectory() {
+    use sndt_host::dataset::ros::msgs::PointCloud2;
     use sndt_host::eval::evaluate::{evaluate, EvalOptions};
-    use sndt_host::ros::export::{GAUSSIANS, POINTS};
-    use sndt_host::ros::msgs::PointCloud2;
+    use sndt_host::output::ros::export::{GAUSSIANS, POINTS};
     let dir = temp("growing");
     let s = Synthetic::new(SynthOptions {
         scenes: 2,

@@ -229,6 +229,6 @@ fn bag(dir: &Path) -> Result<()> {
             predictions: None,
         })
     });
-    sndt_host::ros::write::write_trajectory(&dir.join("wall"), frames)?;
+    sndt_host::output::ros::write::write_trajectory(&dir.join("wall"), frames)?;
     Ok(())
 }

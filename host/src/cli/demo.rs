@@ -259,7 +259,7 @@ fn write_iou_chart_and_metrics(runs: &Runs, a: &DemoArgs) -> Result<()> {
         "pred": runs.pred.to_json(),
         "network_alone": { "miou": net.miou, "mpacc": net.mpacc },
     });
-    crate::output::atomic::write_bytes(
+    crate::atomic::write_bytes(
         &a.out.join("metrics.json"),
         serde_json::to_string_pretty(&json)?,
     )?;

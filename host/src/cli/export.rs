@@ -6,13 +6,13 @@
 use crate::cli::labels::{check_labels, LabelArg};
 use crate::cli::parse::check_cell_config;
 use crate::dataset::open::open_spec;
+use crate::dataset::ros::msgs::Time;
 use crate::dataset::source::{usable_frames, OpenOptions};
 use crate::eval::evaluate::load_snapshot;
 use crate::output::export::{ellipsoids, write_ellipsoids, write_points};
 use crate::output::progress::progress;
-use crate::ros::export::MapBag;
-use crate::ros::msgs::Time;
-use crate::ros::write::frame_time;
+use crate::output::ros::export::MapBag;
+use crate::output::ros::write::frame_time;
 use crate::semantic_map::{integrate_frame, HostMap};
 use anyhow::Result;
 use sndt_core::Config;

@@ -1,8 +1,8 @@
 //! `sndt info BAG.mcap`: what a ROS 2 recording holds and what `sndt map` would use of it.
 
 use super::open_args::OpenArgs;
+use crate::dataset::ros::bag::Bag;
 use crate::dataset::source::Dataset;
-use crate::ros::bag::Bag;
 use anyhow::Result;
 use std::fmt::Write;
 use std::path::PathBuf;

@@ -119,8 +119,8 @@ pub fn run(a: &MapArgs) -> Result<()> {
 /// Writes the metrics table (`metrics.md`) and all numbers (`metrics.json`) into `out`.
 fn write_metrics(eval: &Evaluation, table: &str, out: &Path) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    crate::output::atomic::write_bytes(&out.join("metrics.md"), table)?;
-    crate::output::atomic::write_bytes(
+    crate::atomic::write_bytes(&out.join("metrics.md"), table)?;
+    crate::atomic::write_bytes(
         &out.join("metrics.json"),
         serde_json::to_string_pretty(&eval.to_json())?,
     )?;

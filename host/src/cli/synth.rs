@@ -99,7 +99,10 @@ pub fn write_bags(split: &Synthetic, path: &Path) -> Result<Vec<PathBuf>> {
                 .map_or("synthetic".into(), |s| s.to_string_lossy());
             path.with_file_name(format!("{stem}_{}.mcap", name.replace('/', "_")))
         };
-        let n = crate::ros::write::write_trajectory(&file, ids.iter().map(|id| split.load(id)))?;
+        let n = crate::output::ros::write::write_trajectory(
+            &file,
+            ids.iter().map(|id| split.load(id)),
+        )?;
         println!("wrote {} ({n} frames of {name})", file.display());
         written.push(file);
     }

@@ -6,7 +6,7 @@
 //! - [`open`](open::open): detects a directory's layout, or renders `synthetic[:S:F]`;
 //! - readers: [`synthetic`] (our scenes, rendered on the fly), [`prepared`] (the prepared
 //!   layout, ours and the authors' v0.3.1), [`hypersim`] (raw Hypersim HDF5), [`npy`]
-//!   (ESANet top-k predictions beside any of them);
+//!   (ESANet top-k predictions beside any of them), [`ros`] (ROS 2 bags);
 //! - [`classes`]: the NYU40 class names and colours.
 //!
 //! Readers depend on [`frame`] and [`source`] only; [`open`](open::open) depends on the
@@ -18,6 +18,7 @@ pub mod hypersim;
 pub mod npy;
 pub mod open;
 pub mod prepared;
+pub mod ros;
 pub mod source;
 pub mod synthetic;
 

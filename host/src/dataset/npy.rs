@@ -190,7 +190,7 @@ fn check_header_nesting(mut src: impl Read, shown: &dyn Display) -> Result<impl 
 /// # std::fs::remove_dir_all(&dir).unwrap();
 /// ```
 pub fn write_topk(path: &Path, topk: &TopK, width: u32, height: u32) -> Result<()> {
-    crate::output::atomic::write_atomic(path, |tmp| write_topk_to(tmp, topk, width, height))
+    crate::atomic::write_atomic(path, |tmp| write_topk_to(tmp, topk, width, height))
 }
 
 /// What [`write_topk`] writes, into `path` directly.

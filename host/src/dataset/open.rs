@@ -35,7 +35,7 @@ pub fn open_spec(spec: &str, options: &OpenOptions) -> Result<Box<dyn Dataset>> 
 /// - raw Hypersim has `<root>/<scene>/_detail/`.
 pub fn open(root: &Path, options: &OpenOptions) -> Result<Box<dyn Dataset>> {
     if root.extension().is_some_and(|e| e == "mcap") {
-        let bag = crate::ros::bag::Bag::open(root, &options.bag)?;
+        let bag = crate::dataset::ros::bag::Bag::open(root, &options.bag)?;
         for (stamp, why) in &bag.skipped {
             eprintln!(
                 "warning: {}: skipped depth image at {:.9} s: {why}",

@@ -16,8 +16,8 @@
 //! undoes that. Without an intrinsics file (the authors' data) the camera is the nominal
 //! Hypersim pinhole, or with [`OpenOptions::paper_fy`] the authors' wrong fy.
 
+use crate::atomic::write_atomic;
 use crate::dataset::frame::{show_number, Frame, FrameId, Rays};
-use crate::output::atomic::write_atomic;
 
 use crate::dataset::npy;
 use crate::dataset::source::Dataset;

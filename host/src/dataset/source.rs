@@ -214,7 +214,7 @@ pub struct OpenOptions {
     pub bag: BagOptions,
 }
 
-/// How to read a ROS 2 bag (`crate::ros::bag`).
+/// How to read a ROS 2 bag (`crate::dataset::ros::bag`).
 #[derive(Clone, Debug, Default)]
 pub struct BagOptions {
     /// Frame the poses are in (default `world`).

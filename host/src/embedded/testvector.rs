@@ -40,8 +40,8 @@
 //! (f32 metres, 0 = no return), then `W H` labels (u8: 0 void, 1..=40 NYU40), row-major.
 //! `W H` is a multiple of 4, so every depth image starts 4-byte aligned.
 
+use crate::atomic::write_bytes;
 use crate::embedded::view::{ViewRender, VIEW_HEIGHT, VIEW_WIDTH};
-use crate::output::atomic::write_bytes;
 use anyhow::{bail, ensure, Context, Result};
 use sndt_core::{
     pose_from_matrix, Config, Depth, DepthImage, DepthKind, FrameReport, Isometry3, LabelImage,

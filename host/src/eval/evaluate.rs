@@ -14,11 +14,11 @@
 //! into row bands rendered in parallel.
 
 use crate::dataset::frame::{Frame, FrameId, LabelSource};
+use crate::dataset::ros::msgs::Time;
 use crate::dataset::source::{usable_frames, Dataset};
 use crate::eval::metrics::{Confusion, Metrics};
-use crate::ros::export::MapBag;
-use crate::ros::msgs::Time;
-use crate::ros::write::frame_time;
+use crate::output::ros::export::MapBag;
+use crate::output::ros::write::frame_time;
 use crate::semantic_map::{boxed_map, HostMap, SemanticMap};
 use anyhow::{anyhow, bail, Context, Result};
 use rayon::prelude::*;
@@ -45,7 +45,7 @@ pub struct EvalOptions {
     /// Directory to write each trajectory's final map snapshot into
     /// (`<dir>/<scene>_<cam>.sndt`, readable by `sndt export`).
     pub save_maps: Option<PathBuf>,
-    /// ROS 2 bag of each trajectory's map ([`crate::ros::export`]): this file for one
+    /// ROS 2 bag of each trajectory's map ([`crate::output::ros::export`]): this file for one
     /// trajectory, `<stem>_<scene>_<cam>.mcap` beside it for several.
     pub mcap: Option<PathBuf>,
     /// With `mcap`: write the map every this many frames as well as at the end.
@@ -420,7 +420,7 @@ pub fn save_snapshot<const V: usize, const B: usize, const C: usize>(
         .write_snapshot(&mut buf)
         .map_err(|e| anyhow!("{}: snapshot: {e}", path.display()))?;
     // Atomically: a crash or kill while saving leaves the previous map file intact.
-    crate::output::atomic::write_bytes(path, &buf[..n])
+    crate::atomic::write_bytes(path, &buf[..n])
 }
 
 /// Reads a map snapshot file into a heap map of the evaluation's capacity. The error says

@@ -1068,7 +1068,7 @@ impl Experiment {
         let mut written = Vec::new();
         let mut put = |name: &str, text: &str| -> Result<()> {
             let p = out.join(name);
-            crate::output::atomic::write_bytes(&p, text)?;
+            crate::atomic::write_bytes(&p, text)?;
             written.push(p);
             Ok(())
         };

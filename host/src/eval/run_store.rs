@@ -2,13 +2,13 @@
 //! continue where it stopped (`--resume`) instead of starting from zero.
 //!
 //! A store is a directory (`<out>/runs/`) of small JSON files, each written atomically
-//! ([`crate::output::atomic`]) as soon as its run is finished: a crash or a kill leaves
+//! ([`crate::atomic`]) as soon as its run is finished: a crash or a kill leaves
 //! every file either whole or absent. Beside them, `manifest.json` records the options the
 //! runs were made with; a store is only resumed under the same options. What a file holds
 //! is the caller's business ([`RunStore::save_result`] takes any serialisable value): this
 //! module knows names, the manifest, the counts and the test hook only.
 
-use crate::output::atomic::write_bytes;
+use crate::atomic::write_bytes;
 use anyhow::{bail, Context, Result};
 use serde::de::DeserializeOwned;
 use serde::Serialize;

@@ -20,7 +20,7 @@ use std::path::Path;
 /// # std::fs::remove_dir_all(&dir).unwrap();
 /// ```
 pub fn iou_bars(path: &Path, title: &str, series: &[(&str, &[Option<f64>; 41])]) -> Result<()> {
-    crate::output::atomic::write_atomic(path, |tmp| iou_bars_to(tmp, title, series))
+    crate::atomic::write_atomic(path, |tmp| iou_bars_to(tmp, title, series))
 }
 
 /// What [`iou_bars`] writes, into `path` directly.
@@ -111,7 +111,7 @@ pub type LabelledSeries = [(String, Vec<(f64, f64, String)>)];
 /// # std::fs::remove_dir_all(&dir).unwrap();
 /// ```
 pub fn rate_vs_miou(path: &Path, title: &str, series: &LabelledSeries) -> Result<()> {
-    crate::output::atomic::write_atomic(path, |tmp| rate_vs_miou_to(tmp, title, series))
+    crate::atomic::write_atomic(path, |tmp| rate_vs_miou_to(tmp, title, series))
 }
 
 /// What [`rate_vs_miou`] writes, into `path` directly.

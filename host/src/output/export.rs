@@ -96,7 +96,7 @@ pub fn write_points(path: &Path, es: &[Ellipsoid]) -> Result<()> {
 /// # std::fs::remove_file(&path).unwrap();
 /// ```
 pub fn write_ellipsoids(path: &Path, es: &[Ellipsoid], sigmas: f32) -> Result<()> {
-    crate::output::atomic::write_atomic(path, |tmp| write_ellipsoids_to(tmp, es, sigmas))
+    crate::atomic::write_atomic(path, |tmp| write_ellipsoids_to(tmp, es, sigmas))
 }
 
 /// What [`write_ellipsoids`] writes, into `path` directly.

@@ -7,7 +7,7 @@ use std::path::Path;
 
 /// Writes an 8-bit RGB PNG.
 pub fn write_rgb(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
-    crate::output::atomic::write_atomic(path, |tmp| write_rgb_to(tmp, width, height, rgb))
+    crate::atomic::write_atomic(path, |tmp| write_rgb_to(tmp, width, height, rgb))
 }
 
 /// What [`write_rgb`] writes, into `path` directly.

@@ -22,7 +22,7 @@ pub const GREY: [u8; 3] = [128, 128, 128];
 /// # std::fs::remove_file(&path).unwrap();
 /// ```
 pub fn write_points(path: &Path, points: &[([f32; 3], [u8; 3])]) -> Result<()> {
-    crate::output::atomic::write_atomic(path, |tmp| write_points_to(tmp, points))
+    crate::atomic::write_atomic(path, |tmp| write_points_to(tmp, points))
 }
 
 /// What [`write_points`] writes, into `path` directly.

@@ -105,7 +105,7 @@ impl fmt::Display for PointsSummary {
 /// ```
 pub fn write_points(data: &dyn Dataset, ids: &[FrameId], out: &Path) -> Result<PointsSummary> {
     let mut summary = None;
-    crate::output::atomic::write_atomic(out, |tmp| {
+    crate::atomic::write_atomic(out, |tmp| {
         summary = Some(write_points_to(data, ids, tmp)?);
         Ok(())
     })?;

@@ -17,7 +17,7 @@ impl Time {
     /// From nanoseconds since the epoch (as MCAP log times).
     ///
     /// ```
-    /// use sndt_host::ros::msgs::Time;
+    /// use sndt_host::dataset::ros::msgs::Time;
     /// assert_eq!(Time::from_nanos(1_500_000_000), Time { sec: 1, nanosec: 500_000_000 });
     /// assert_eq!(Time::from_nanos(1_500_000_000).nanos(), 1_500_000_000);
     /// ```

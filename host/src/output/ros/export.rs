@@ -5,12 +5,12 @@
 //! puts at the identity of the world frame. Written once, or every N frames so that the
 //! recording plays back as a growing map.
 
-use super::msgs::{
+use super::write::BagWriter;
+use crate::dataset::classes::color;
+use crate::dataset::ros::msgs::{
     self, ColorRgba, Header, Marker, MarkerArray, PointCloud2, PointField, Pose, TfMessage, Time,
     Transform, TransformStamped,
 };
-use super::write::BagWriter;
-use crate::dataset::classes::color;
 use anyhow::Result;
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion};
 use sndt_core::{Map, Occupancy};

@@ -35,7 +35,7 @@ pub fn temporary(path: &Path) -> Result<PathBuf> {
 /// error the temporary file is removed and `path` is untouched.
 ///
 /// ```
-/// use sndt_host::output::atomic::write_atomic;
+/// use sndt_host::atomic::write_atomic;
 /// let path = std::env::temp_dir().join(format!("sndt-atomic-{}.txt", std::process::id()));
 /// write_atomic(&path, |tmp| Ok(std::fs::write(tmp, "one")?)).unwrap();
 /// assert!(write_atomic(&path, |_| anyhow::bail!("disk full")).is_err());
@@ -70,7 +70,7 @@ pub fn commit(tmp: &Path, path: &Path) -> Result<()> {
 ///
 /// ```
 /// let path = std::env::temp_dir().join(format!("sndt-atomic-bytes-{}", std::process::id()));
-/// sndt_host::output::atomic::write_bytes(&path, b"map").unwrap();
+/// sndt_host::atomic::write_bytes(&path, b"map").unwrap();
 /// assert_eq!(std::fs::read(&path).unwrap(), b"map");
 /// # std::fs::remove_file(&path).unwrap();
 /// ```

@@ -1,10 +1,12 @@
 //! Writing ROS 2 recordings: an MCAP writer of CDR messages with `ros2msg` schemas (as
 //! `ros2 bag record` writes them), and a synthetic trajectory as such a bag.
 
-use super::msgs::{self, CameraInfo, Header, Image, TfMessage, Time, Transform, TransformStamped};
+use crate::atomic::{commit, temporary};
 use crate::dataset::frame::{Frame, Rays};
 use crate::dataset::prepared::{depth_to_mm, Extrinsics};
-use crate::output::atomic::{commit, temporary};
+use crate::dataset::ros::msgs::{
+    self, CameraInfo, Header, Image, TfMessage, Time, Transform, TransformStamped,
+};
 use anyhow::{anyhow, bail, Context, Result};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashMap};

@@ -165,7 +165,7 @@ pub fn to_pose(p: &Isometry3<f64>) -> sndt_core::Isometry3<f32> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ros::msgs::{Header, Time, Vector3};
+    use crate::dataset::ros::msgs::{Header, Time, Vector3};
 
     fn tf(parent: &str, child: &str, ns: u64, x: f64, yaw: f64) -> TransformStamped {
         let (s, c) = (yaw / 2.0).sin_cos();
