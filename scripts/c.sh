@@ -49,13 +49,13 @@ cmake -S "$C_DIR" -B "$BUILD" -DSNDT_EXAMPLES=ON -DCMAKE_BUILD_TYPE=Release >/de
 cmake --build "$BUILD" -j 2
 (cd "$BUILD" && ctest --output-on-failure)
 
-step "the README's C example compiles (C99, -Wall -Wextra -Werror -pedantic)"
-awk '/^## Use from C\/C\+\+/ { s = 1 } s && /^```c$/ { c = 1; next } c && /^```$/ { exit } c' \
-    README.md >"$BUILD/readme_example.c"
-test -s "$BUILD/readme_example.c"
-cc -std=c99 -Wall -Wextra -Werror -pedantic -I"$C_DIR/include" -c "$BUILD/readme_example.c" \
-    -o "$BUILD/readme_example.o"
-echo "README example: compiles"
+step "the C program of docs/C_API.md compiles (C99, -Wall -Wextra -Werror -pedantic)"
+awk '/^## A first program/ { s = 1 } s && /^```c$/ { c = 1; next } c && /^```$/ { exit } c' \
+    docs/C_API.md >"$BUILD/first_program.c"
+test -s "$BUILD/first_program.c"
+cc -std=c99 -Wall -Wextra -Werror -pedantic -I"$C_DIR/include" -c "$BUILD/first_program.c" \
+    -o "$BUILD/first_program.o"
+echo "docs/C_API.md example: compiles"
 
 step "CRCs from C and C++ against the Rust test vector's"
 want=$(tr -d '[:space:]' <"$VECTOR_DIR/expected_crc.txt")
