@@ -4,6 +4,7 @@
 
 pub mod chart;
 pub mod export;
+pub mod legend;
 pub mod picture;
 pub mod ply;
 pub mod points;

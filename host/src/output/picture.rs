@@ -1,6 +1,7 @@
 //! PNG pictures: label images side by side, a bird's-eye view of a semantic map.
 
 use crate::dataset::classes::color;
+use crate::output::legend::{classes_present, with_legend, Legend};
 use anyhow::{Context, Result};
 use sndt_core::{Map, Occupancy};
 use std::path::Path;
@@ -51,12 +52,39 @@ pub fn side_by_side(
 
 /// Top view of the map's occupied surface voxels below `z_max` metres: per column the
 /// highest one, in its class colour, darker when lower; one square of pixels per voxel
-/// column, north up.
+/// column, north up. A white column on the right holds the legend: the classes drawn, a
+/// scale bar and how to read the shading.
 pub fn birds_eye<const V: usize, const B: usize, const C: usize>(
     path: &Path,
     map: &Map<V, B, C>,
     z_max: f32,
 ) -> Result<()> {
+    let view = top_view(map, z_max)?;
+    let legend = Legend {
+        classes: view.classes,
+        metres_per_pixel: view.metres_per_pixel,
+        note: "darker: lower",
+    };
+    let out = with_legend(&view.rgb, view.width, view.height, &legend);
+    write_rgb(path, out.width(), out.height(), out.as_rgb())
+}
+
+/// The map part of [`birds_eye`]'s picture, with what its legend needs.
+struct TopView {
+    width: u32,
+    height: u32,
+    rgb: Vec<u8>,
+    /// The classes of the columns drawn.
+    classes: Vec<u8>,
+    /// Metres on the ground per pixel: the cell size over the pixels per voxel.
+    metres_per_pixel: f32,
+}
+
+/// Draws the map part of [`birds_eye`]'s picture.
+fn top_view<const V: usize, const B: usize, const C: usize>(
+    map: &Map<V, B, C>,
+    z_max: f32,
+) -> Result<TopView> {
     let h = map.config().cell_size;
     let cols: Vec<_> = map
         .voxels()
@@ -110,5 +138,11 @@ pub fn birds_eye<const V: usize, const B: usize, const C: usize>(
             }
         }
     }
-    write_rgb(path, w, hgt, &rgb)
+    Ok(TopView {
+        width: w,
+        height: hgt,
+        rgb,
+        classes: classes_present(top.iter().filter(|t| t.0 != f32::MIN).map(|t| t.1)),
+        metres_per_pixel: h / s as f32,
+    })
 }
