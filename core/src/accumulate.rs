@@ -11,10 +11,10 @@
 use crate::frame::{accumulator_index, Accumulator, FrameState};
 use crate::key::{axis_key, VoxelKey};
 use crate::labels::Labels;
-use crate::map::Map;
 use crate::sqrt::sqrt;
-use crate::votes::{vote_max, voting_classes};
-use crate::voxel::{packed_offsets, PackedSums, Voxel};
+use crate::storage::map::Map;
+use crate::storage::votes::{vote_max, voting_classes};
+use crate::storage::voxel::{packed_offsets, PackedSums, Voxel};
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// Phase 1 for one point `p` in the sensor frame; every point ends in exactly one

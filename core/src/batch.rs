@@ -19,8 +19,8 @@ use crate::key::VoxelKey;
 use crate::key::KEY_LIMIT;
 use crate::labels::{LabeledPoint, Labels};
 use crate::sqrt::sqrt;
-use crate::votes::{vote_hash, voting_classes};
-use crate::voxel::packed_offsets;
+use crate::storage::votes::{vote_hash, voting_classes};
+use crate::storage::voxel::packed_offsets;
 
 /// Points per batch: large enough that the per-batch work vanishes, small enough for a
 /// microcontroller's stack (a batch is about 4 KiB).

@@ -17,15 +17,15 @@
 //! key order, so the result does not depend on point order.
 
 use crate::batch::{Batch, BATCH, TILE_COLS};
-use crate::block::bits;
 use crate::camera::{DepthImage, LabelImage, PixelRays};
 use crate::config::to_fixed;
 use crate::error::Error;
 use crate::frame::{FrameReport, FrameState, Phase, MAX_FRAME_POINTS};
 use crate::key::VoxelKey;
 use crate::labels::{LabeledPoint, Labels};
-use crate::map::Map;
-use crate::table::Entry;
+use crate::storage::block::bits;
+use crate::storage::map::Map;
+use crate::storage::table::Entry;
 use nalgebra::Isometry3;
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {

@@ -102,17 +102,10 @@ mod sqrt;
 mod camera;
 mod config;
 
-mod table;
-
-mod block;
-mod voxel;
-
-mod map;
-mod votes;
+mod storage;
 
 mod evict;
 mod raycast;
-mod snapshot;
 mod splat;
 
 mod frame;
@@ -139,11 +132,11 @@ pub use free_space::voxels_on_segment;
 pub use gaussian::Gaussian;
 pub use key::{VoxelKey, KEY_LIMIT};
 pub use labels::{LabeledPoint, Labels, MAX_TOP_K};
-pub use map::{
-    Map, MapStats, Occupancy, VoxelView, BLOCK_BYTES, BLOCK_TABLE_BYTES, MAP_HEADER_BYTES,
-};
 pub use nalgebra::{Isometry3, Matrix3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
 pub use raycast::RayHit;
 pub use render::INVALID_LABEL;
-pub use snapshot::{SNAPSHOT_BLOCK_BYTES, SNAPSHOT_HEADER_BYTES, SNAPSHOT_VERSION};
-pub use votes::{next_vote_exponent, takes_vote, vote_hash, MAX_VOTE_EXPONENT};
+pub use storage::map::{
+    Map, MapStats, Occupancy, VoxelView, BLOCK_BYTES, BLOCK_TABLE_BYTES, MAP_HEADER_BYTES,
+};
+pub use storage::snapshot::{SNAPSHOT_BLOCK_BYTES, SNAPSHOT_HEADER_BYTES, SNAPSHOT_VERSION};
+pub use storage::votes::{next_vote_exponent, takes_vote, vote_hash, MAX_VOTE_EXPONENT};

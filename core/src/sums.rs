@@ -26,9 +26,9 @@ use crate::frame::Accumulator;
 use crate::frame::{accumulator_index, FrameState};
 use crate::key::VoxelKey;
 use crate::labels::Labels;
-use crate::map::Map;
+use crate::storage::map::Map;
 #[cfg(doc)]
-use crate::voxel::packed_offsets;
+use crate::storage::voxel::packed_offsets;
 
 /// The accumulator index of points whose voxel could not be created (the map is full).
 const DROPPED: usize = usize::MAX;
@@ -443,7 +443,7 @@ mod tests {
         }
         let voxels = map.voxels.slots.iter();
         voxels
-            .map(crate::voxel::Voxel::vote_exponent)
+            .map(crate::storage::voxel::Voxel::vote_exponent)
             .max()
             .unwrap_or(0)
     }

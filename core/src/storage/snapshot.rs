@@ -19,15 +19,15 @@
 //! Blocks and voxels appear in canonical order (by key hash, then key), so equal maps give
 //! equal bytes whatever order they were built in, and duplicates are detectable.
 
-use crate::block::Block;
 use crate::config::{to_fixed, Config, MissModel};
 use crate::crc::{crc32, Crc32};
 use crate::error::Error;
 use crate::key::{join_key, order, split_key, VoxelKey, KEY_LIMIT};
-use crate::map::{Map, MapStats};
-use crate::table::Entry;
-use crate::votes::MAX_VOTE_EXPONENT;
-use crate::voxel::{scatter, Voxel};
+use crate::storage::block::Block;
+use crate::storage::map::{Map, MapStats};
+use crate::storage::table::Entry;
+use crate::storage::votes::MAX_VOTE_EXPONENT;
+use crate::storage::voxel::{scatter, Voxel};
 
 /// Snapshot format version written by this build.
 pub const SNAPSHOT_VERSION: u16 = 2;

@@ -11,7 +11,7 @@
 use crate::config::Config;
 use crate::gaussian::{floor_abs, Gaussian, Prepared};
 use crate::key::{join_key, split_key, VoxelKey};
-use crate::table::Entry;
+use crate::storage::table::Entry;
 use nalgebra::{Matrix3, Vector3};
 
 /// A surface (NDT) voxel: point sums, class histogram, table link.
