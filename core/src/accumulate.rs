@@ -9,9 +9,9 @@
 //! sample takes it. Points beyond max range only mark their truncated ray end (`far`).
 
 use crate::frame::{accumulator_index, Accumulator, FrameState};
+use crate::geometry::sqrt::sqrt;
 use crate::key::{axis_key, VoxelKey};
 use crate::labels::Labels;
-use crate::sqrt::sqrt;
 use crate::storage::map::Map;
 use crate::storage::votes::{vote_max, voting_classes};
 use crate::storage::voxel::{packed_offsets, PackedSums, Voxel};

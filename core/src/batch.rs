@@ -9,16 +9,16 @@
 //! 2. **accumulate** ([`Phase::Accumulate`](crate::Phase::Accumulate), `sums.rs`): integer
 //!    sums per voxel and votes, one voxel lookup per voxel of the batch.
 
-use crate::camera::{mm_to_metres, Depth, DepthImage, DepthKind, LabelImage, PixelRays};
 use crate::config::Config;
 #[cfg(doc)]
 use crate::frame::Accumulator;
 use crate::frame::FrameState;
+use crate::geometry::camera::{mm_to_metres, Depth, DepthImage, DepthKind, LabelImage, PixelRays};
+use crate::geometry::sqrt::sqrt;
 #[cfg(doc)]
 use crate::key::VoxelKey;
 use crate::key::KEY_LIMIT;
 use crate::labels::{LabeledPoint, Labels};
-use crate::sqrt::sqrt;
 use crate::storage::votes::{vote_hash, voting_classes};
 use crate::storage::voxel::packed_offsets;
 

@@ -5,9 +5,9 @@
 //! equals the frame's; the first touch of a block in a frame resets them and links the
 //! block into the frame's list, which phases 2 and 3 walk in key order.
 
-use crate::camera::validate_pose;
 use crate::config::to_fixed;
 use crate::error::Error;
+use crate::geometry::camera::validate_pose;
 use crate::key::{axis_key, floor_i32, VoxelKey, KEY_LIMIT};
 use crate::storage::block::Block;
 use crate::storage::map::Map;

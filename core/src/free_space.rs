@@ -9,11 +9,11 @@
 //! grazing rays do not erase thin surfaces.
 
 use crate::config::{to_fixed, Config, MissModel};
-use crate::dda::{lane_keys, Dda, LANES, LANE_STEPS};
 use crate::frame::FrameState;
-use crate::gaussian::{PrepCache, Prepared};
+use crate::geometry::dda::{lane_keys, Dda, LANES, LANE_STEPS};
+use crate::geometry::gaussian::{PrepCache, Prepared};
+use crate::geometry::sqrt::sqrt;
 use crate::key::{VoxelKey, KEY_LIMIT};
-use crate::sqrt::sqrt;
 use crate::storage::block::bits;
 use crate::storage::map::Map;
 use crate::storage::table::Entry;

@@ -17,10 +17,10 @@
 //! key order, so the result does not depend on point order.
 
 use crate::batch::{Batch, BATCH, TILE_COLS};
-use crate::camera::{DepthImage, LabelImage, PixelRays};
 use crate::config::to_fixed;
 use crate::error::Error;
 use crate::frame::{FrameReport, FrameState, Phase, MAX_FRAME_POINTS};
+use crate::geometry::camera::{DepthImage, LabelImage, PixelRays};
 use crate::key::VoxelKey;
 use crate::labels::{LabeledPoint, Labels};
 use crate::storage::block::bits;
@@ -332,7 +332,7 @@ mod tests {
 mod tile_tests {
     extern crate std;
 
-    use crate::camera::PixelRays;
+    use crate::geometry::camera::PixelRays;
     use crate::testutil::*;
     use crate::*;
     use std::vec::Vec;

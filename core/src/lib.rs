@@ -84,7 +84,7 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
-// The `std` feature only switches the square root to std's (see `sqrt.rs`).
+// The `std` feature only switches the square root to std's (see `geometry/sqrt.rs`).
 #[cfg(feature = "std")]
 extern crate std;
 
@@ -94,13 +94,10 @@ mod labels;
 
 mod key;
 
-mod crc;
-mod dda;
-mod gaussian;
-mod sqrt;
-
-mod camera;
 mod config;
+mod crc;
+
+mod geometry;
 
 mod storage;
 
@@ -121,15 +118,15 @@ mod render;
 #[cfg(test)]
 mod testutil;
 
-pub use camera::{
-    depth_point, pose_from_matrix, validate_pose, Depth, DepthImage, DepthKind, LabelImage, Pinhole,
-};
 pub use config::{Config, MissModel, LOGODDS_ONE};
 pub use crc::Crc32;
 pub use error::{ConfigField, Error};
 pub use frame::{FrameReport, Phase, MAX_FRAME_POINTS};
 pub use free_space::voxels_on_segment;
-pub use gaussian::Gaussian;
+pub use geometry::camera::{
+    depth_point, pose_from_matrix, validate_pose, Depth, DepthImage, DepthKind, LabelImage, Pinhole,
+};
+pub use geometry::gaussian::Gaussian;
 pub use key::{VoxelKey, KEY_LIMIT};
 pub use labels::{LabeledPoint, Labels, MAX_TOP_K};
 pub use nalgebra::{Isometry3, Matrix3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};

@@ -13,10 +13,10 @@
 //! the pixels it covers), with the per-pixel test [`Prep::enter`] shared, so both give the
 //! same distances.
 
-use crate::dda::Dda;
-use crate::gaussian::Prepared;
+use crate::geometry::dda::Dda;
+use crate::geometry::gaussian::Prepared;
+use crate::geometry::sqrt::sqrt;
 use crate::key::{VoxelKey, KEY_LIMIT};
-use crate::sqrt::sqrt;
 use crate::storage::block::bits;
 use crate::storage::map::Map;
 use crate::storage::voxel::argmax;
@@ -350,7 +350,7 @@ pub(crate) mod tests {
     extern crate std;
 
     use super::*;
-    use crate::gaussian::PrepCache;
+    use crate::geometry::gaussian::PrepCache;
     use crate::storage::block::Block;
     use crate::storage::table::Table;
     use crate::testutil::*;

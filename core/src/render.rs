@@ -13,13 +13,13 @@
 //! that neighbourhood. Two Gaussians entered at exactly the same distance are decided by
 //! [`Map::raycast`] for that pixel (it breaks the tie by key).
 
-use crate::camera::{validate_pose, Pinhole};
 use crate::error::Error;
-use crate::gaussian::floor_abs;
+use crate::geometry::camera::{validate_pose, Pinhole};
+use crate::geometry::gaussian::floor_abs;
+use crate::geometry::sqrt::sqrt;
 use crate::key::VoxelKey;
 use crate::raycast::{Lanes3, Prep, LANES};
 use crate::splat::{pixel_to_ray, Footprint};
-use crate::sqrt::sqrt;
 use crate::storage::block::bits;
 use crate::storage::map::Map;
 use crate::storage::table::Entry;
@@ -302,7 +302,7 @@ mod tests {
     extern crate std;
 
     use super::*;
-    use crate::gaussian::PrepCache;
+    use crate::geometry::gaussian::PrepCache;
     use crate::raycast::tests::*;
     use crate::testutil::*;
     use crate::*;

@@ -4,7 +4,7 @@
 
 use crate::config::{Config, MissModel, LOGODDS_ONE};
 use crate::error::Error;
-use crate::gaussian::Gaussian;
+use crate::geometry::gaussian::Gaussian;
 use crate::key::VoxelKey;
 use crate::storage::block::Block;
 use crate::storage::table::{Entry, Table};
