@@ -102,8 +102,6 @@ mod geometry;
 mod storage;
 
 mod evict;
-mod raycast;
-mod splat;
 
 mod frame;
 
@@ -113,7 +111,8 @@ mod free_space;
 mod sums;
 
 mod integrate;
-mod render;
+
+mod readout;
 
 #[cfg(test)]
 mod testutil;
@@ -130,8 +129,8 @@ pub use geometry::gaussian::Gaussian;
 pub use key::{VoxelKey, KEY_LIMIT};
 pub use labels::{LabeledPoint, Labels, MAX_TOP_K};
 pub use nalgebra::{Isometry3, Matrix3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
-pub use raycast::RayHit;
-pub use render::INVALID_LABEL;
+pub use readout::raycast::RayHit;
+pub use readout::render::INVALID_LABEL;
 pub use storage::map::{
     Map, MapStats, Occupancy, VoxelView, BLOCK_BYTES, BLOCK_TABLE_BYTES, MAP_HEADER_BYTES,
 };

@@ -182,7 +182,7 @@ mod tests {
     use super::*;
     use crate::geometry::camera::Pinhole;
     use crate::geometry::gaussian::{floor_abs, Gaussian};
-    use crate::raycast::Prep;
+    use crate::readout::raycast::Prep;
     use crate::testutil::Lcg;
     use nalgebra::{Rotation3, Vector3};
 

@@ -18,8 +18,8 @@ use crate::geometry::camera::{validate_pose, Pinhole};
 use crate::geometry::gaussian::floor_abs;
 use crate::geometry::sqrt::sqrt;
 use crate::key::VoxelKey;
-use crate::raycast::{Lanes3, Prep, LANES};
-use crate::splat::{pixel_to_ray, Footprint};
+use crate::readout::raycast::{Lanes3, Prep, LANES};
+use crate::readout::splat::{pixel_to_ray, Footprint};
 use crate::storage::block::bits;
 use crate::storage::map::Map;
 use crate::storage::table::Entry;
@@ -303,7 +303,7 @@ mod tests {
 
     use super::*;
     use crate::geometry::gaussian::PrepCache;
-    use crate::raycast::tests::*;
+    use crate::readout::raycast::tests::*;
     use crate::testutil::*;
     use crate::*;
     use std::vec::Vec;
