@@ -101,15 +101,6 @@ mod geometry;
 
 mod storage;
 
-mod evict;
-
-mod frame;
-
-mod accumulate;
-mod batch;
-mod free_space;
-mod sums;
-
 mod integrate;
 
 mod readout;
@@ -120,12 +111,12 @@ mod testutil;
 pub use config::{Config, MissModel, LOGODDS_ONE};
 pub use crc::Crc32;
 pub use error::{ConfigField, Error};
-pub use frame::{FrameReport, Phase, MAX_FRAME_POINTS};
-pub use free_space::voxels_on_segment;
 pub use geometry::camera::{
     depth_point, pose_from_matrix, validate_pose, Depth, DepthImage, DepthKind, LabelImage, Pinhole,
 };
 pub use geometry::gaussian::Gaussian;
+pub use integrate::frame::{FrameReport, Phase, MAX_FRAME_POINTS};
+pub use integrate::free_space::voxels_on_segment;
 pub use key::{VoxelKey, KEY_LIMIT};
 pub use labels::{LabeledPoint, Labels, MAX_TOP_K};
 pub use nalgebra::{Isometry3, Matrix3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};

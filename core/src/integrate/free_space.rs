@@ -9,10 +9,10 @@
 //! grazing rays do not erase thin surfaces.
 
 use crate::config::{to_fixed, Config, MissModel};
-use crate::frame::FrameState;
 use crate::geometry::dda::{lane_keys, Dda, LANES, LANE_STEPS};
 use crate::geometry::gaussian::{PrepCache, Prepared};
 use crate::geometry::sqrt::sqrt;
+use crate::integrate::frame::FrameState;
 use crate::key::{VoxelKey, KEY_LIMIT};
 use crate::storage::block::bits;
 use crate::storage::map::Map;

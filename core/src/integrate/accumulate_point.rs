@@ -8,8 +8,8 @@
 //! run) and added to the voxel once. A point votes if its labels do and the voxel's vote
 //! sample takes it. Points beyond max range only mark their truncated ray end (`far`).
 
-use crate::frame::{accumulator_index, Accumulator, FrameState};
 use crate::geometry::sqrt::sqrt;
+use crate::integrate::frame::{accumulator_index, Accumulator, FrameState};
 use crate::key::{axis_key, VoxelKey};
 use crate::labels::Labels;
 use crate::storage::map::Map;

@@ -20,10 +20,10 @@
 //! non-finite, several voting classes) goes through the scalar `Map::add_point`, which
 //! handles and counts every case, at its place in the batch.
 
-use crate::batch::{Batch, BAD_LABEL, BATCH, FAST, NO_DEPTH, PACK_PER_POINT};
 #[cfg(doc)]
-use crate::frame::Accumulator;
-use crate::frame::{accumulator_index, FrameState};
+use crate::integrate::frame::Accumulator;
+use crate::integrate::frame::{accumulator_index, FrameState};
+use crate::integrate::points::{Batch, BAD_LABEL, BATCH, FAST, NO_DEPTH, PACK_PER_POINT};
 use crate::key::VoxelKey;
 use crate::labels::Labels;
 use crate::storage::map::Map;
@@ -48,7 +48,7 @@ const BY_POINTS: bool = PACK_PER_POINT;
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// The accumulation stage for a converted batch with its labels set; `labels(index)`
-    /// gives the labels of a point (see [`crate::batch::Source::index`]) for the scalar
+    /// gives the labels of a point (see [`crate::integrate::points::Source::index`]) for the scalar
     /// path.
     #[inline]
     pub(crate) fn accumulate(

@@ -10,11 +10,11 @@
 //!    sums per voxel and votes, one voxel lookup per voxel of the batch.
 
 use crate::config::Config;
-#[cfg(doc)]
-use crate::frame::Accumulator;
-use crate::frame::FrameState;
 use crate::geometry::camera::{mm_to_metres, Depth, DepthImage, DepthKind, LabelImage, PixelRays};
 use crate::geometry::sqrt::sqrt;
+#[cfg(doc)]
+use crate::integrate::frame::Accumulator;
+use crate::integrate::frame::FrameState;
 #[cfg(doc)]
 use crate::key::VoxelKey;
 use crate::key::KEY_LIMIT;
@@ -562,7 +562,7 @@ mod tests {
             let mut cfg = Config::with_cell_size(cell);
             cfg.max_range = Config::MAX_RAY_CELLS as f32 * cell;
             let mut map: std::boxed::Box<Map<64, 16, 4>> = std::boxed::Box::new(Map::new(cfg));
-            let reach = crate::frame::key_reach(Config::MAX_RAY_CELLS as f32);
+            let reach = crate::integrate::frame::key_reach(Config::MAX_RAY_CELLS as f32);
             let zone_edge = (KEY_LIMIT as f32 - reach) * cell;
             // A quaternion 0.05 % longer than a unit one (a rotation scaled by 1.001).
             let turn = UnitQuaternion::from_euler_angles(0.3, -0.2, 0.7).into_inner();

@@ -16,11 +16,23 @@
 //! Phase 1 only adds to integer sums and sets per-frame masks, and phases 2 and 3 go in
 //! key order, so the result does not depend on point order.
 
-use crate::batch::{Batch, BATCH, TILE_COLS};
+pub(crate) mod evict;
+
+pub(crate) mod frame;
+
+pub(crate) mod points;
+
+pub(crate) mod accumulate_point;
+
+pub(crate) mod accumulate;
+
+pub(crate) mod free_space;
+
 use crate::config::to_fixed;
 use crate::error::Error;
-use crate::frame::{FrameReport, FrameState, Phase, MAX_FRAME_POINTS};
 use crate::geometry::camera::{DepthImage, LabelImage, PixelRays};
+use crate::integrate::frame::{FrameReport, FrameState, Phase, MAX_FRAME_POINTS};
+use crate::integrate::points::{Batch, BATCH, TILE_COLS};
 use crate::key::VoxelKey;
 use crate::labels::{LabeledPoint, Labels};
 use crate::storage::block::bits;
