@@ -26,18 +26,16 @@ pub(crate) mod accumulate_point;
 
 pub(crate) mod accumulate;
 
+pub(crate) mod end_voxels;
+
 pub(crate) mod free_space;
 
-use crate::config::to_fixed;
 use crate::error::Error;
 use crate::geometry::camera::{DepthImage, LabelImage, PixelRays};
 use crate::integrate::frame::{FrameReport, FrameState, Phase, MAX_FRAME_POINTS};
 use crate::integrate::points::{Batch, BATCH, TILE_COLS};
-use crate::key::VoxelKey;
 use crate::labels::{LabeledPoint, Labels};
-use crate::storage::block::bits;
 use crate::storage::map::Map;
-use crate::storage::table::Entry;
 use nalgebra::Isometry3;
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
@@ -191,28 +189,6 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         on_phase(Phase::Done);
         report
     }
-
-    /// Phase 2 along the sorted frame list from `head`: every voxel that received points
-    /// decays to `n_max`, ends its vote sample, and gets one hit.
-    fn update_end_voxels(&mut self, f: &mut FrameState, head: u32) {
-        let cfg = self.config;
-        let (lo, hi) = (to_fixed(cfg.clamp_min), to_fixed(cfg.clamp_max));
-        let hit = to_fixed(cfg.hit);
-        self.for_each_frame_block(head, |map, bs, b| {
-            for cell in bits(b.hit) {
-                let key = VoxelKey::from_block_cell(b.packed_key(), cell);
-                let found = map.voxels.find(key.packed());
-                if let Some(v) = found.and_then(|vs| map.voxels.get_mut(vs)) {
-                    v.decay(cfg.n_max);
-                    v.end_vote_sample(cfg.votes_per_frame);
-                }
-                if let Some(b) = map.blocks.get_mut(bs) {
-                    b.add_logodds(cell, hit, lo, hi);
-                }
-                f.report.end_voxels += 1;
-            }
-        });
-    }
 }
 
 #[cfg(test)]
@@ -220,6 +196,7 @@ mod tests {
     extern crate std;
 
     use super::*;
+    use crate::config::to_fixed;
     use crate::testutil::*;
     use crate::*;
     use std::vec::Vec;
