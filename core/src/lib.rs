@@ -28,21 +28,27 @@
 //!
 //! Each module uses only modules above it (the unit tests at the end of a module may use
 //! anything). Methods of [`Map`] are spread over the modules of their concern, and calls
-//! between them point up this list too.
+//! between them point up this list too. The folders say what a module is for: `geometry/`
+//! the numerics the others share, `storage/` what the map holds and its snapshot image,
+//! `integrate/` the stages a frame passes through (one file per [`Phase`], then the entry
+//! points in `integrate/mod.rs`), and `readout/` what is read back out along rays. A new
+//! stage of a frame goes in `integrate/`, a new way to read the map in `readout/`, and a
+//! change to what is stored or its format in `storage/`.
 //!
 //! | module | what it holds |
 //! |---|---|
 //! | `error`, `labels` | [`Error`] and the [`ConfigField`] it names; a point's top-k [`Labels`] and [`LabeledPoint`] |
 //! | `key` | [`VoxelKey`], packed table keys and the hash that orders them |
-//! | `crc`, `dda`, `sqrt`, `gaussian` | CRC-32; 3-D DDA voxel walk; the square root; [`Gaussian`], its prepared inverse with the eigenvalue floor |
-//! | `config`, `camera` | [`Config`]; [`Pinhole`], depth images, [`depth_point`], pose checks |
-//! | `table` | the fixed-capacity hash table with stable slots |
-//! | `block`, `voxel` | occupancy blocks; surface voxels: sums, decay, histogram |
-//! | `map`, `votes` | the [`Map`] struct and its queries; vote sampling of the histogram |
-//! | `evict`, `raycast`, `snapshot`, `splat` | eviction of far entries; [`Map::raycast`] and the ray-ellipsoid test; snapshots; an ellipsoid's pixel footprint |
-//! | `frame` | the state of one frame being integrated, [`FrameReport`] |
-//! | `accumulate`, `batch`, `sums`, `free_space` | integration phase 1 (points into sums and votes; the scalar path, and batches of 64 points in two vectorisable stages) and phase 3 (rays) |
-//! | `integrate`, `render` | [`Map::integrate`] and [`Map::integrate_depth`] as their steps; [`Map::render`] (each visible Gaussian drawn over its footprint) |
+//! | `config`, `crc` | [`Config`]; CRC-32 |
+//! | `geometry::{sqrt, dda, gaussian, camera}` | the square root; 3-D DDA voxel walk; [`Gaussian`], its prepared inverse with the eigenvalue floor; [`Pinhole`], depth images, [`depth_point`], pose checks |
+//! | `storage::table` | the fixed-capacity hash table with stable slots |
+//! | `storage::{block, voxel, votes}` | occupancy blocks; surface voxels: sums, decay, histogram; vote sampling of the histogram |
+//! | `storage::{map, snapshot}` | the [`Map`] struct and its queries; snapshots |
+//! | `integrate::{evict, frame}` | eviction of far entries when a table is full; the state of one frame being integrated, [`FrameReport`], [`Phase`] |
+//! | `integrate::{points, accumulate_point, accumulate}` | phase 1 in batches of 64 points: [`Phase::Points`] (pixels to world points, keys and offsets in vectorisable loops), then [`Phase::Accumulate`] (into voxel sums and votes; one point at a time in `accumulate_point`, which also holds the voxel lookup and accumulators) |
+//! | `integrate::{end_voxels, free_space}` | [`Phase::EndVoxels`] (one update per touched voxel); [`Phase::FreeSpace`] (rays, NDT-OM misses) |
+//! | `integrate` | [`Map::integrate`] and [`Map::integrate_depth`] as their steps |
+//! | `readout::{raycast, splat, render}` | [`Map::raycast`] and the ray-ellipsoid test; an ellipsoid's pixel footprint; [`Map::render`] (each visible Gaussian drawn over its footprint) |
 //!
 //! Integer formats, the snapshot layout and eviction are described in more depth in
 //! `docs/ARCHITECTURE.md`.

@@ -22,7 +22,7 @@ pub fn proptest_config(cases: u32) -> proptest::test_runner::Config {
 }
 
 /// Byte offset of the `frames` counter in a snapshot header (magic 4, version 2, classes 2,
-/// capacities 8, config 60; see `core/src/snapshot.rs`).
+/// capacities 8, config 60; see `core/src/storage/snapshot.rs`).
 pub const SNAPSHOT_FRAMES_OFFSET: usize = 76;
 
 /// The map's snapshot in a `Vec` of exactly `snapshot_len()` bytes.

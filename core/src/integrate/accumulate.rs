@@ -433,7 +433,7 @@ mod tests {
         (reports, snapshot(&*map))
     }
 
-    /// The largest vote-sampling exponent of a voxel after `frames` (see `votes.rs`).
+    /// The largest vote-sampling exponent of a voxel after `frames` (see `storage/votes.rs`).
     fn most_sampled(frames: &[Vec<LabeledPoint>]) -> u8 {
         let mut cfg = Config::DEFAULT;
         cfg.votes_per_frame = 4;

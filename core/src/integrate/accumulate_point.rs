@@ -1,4 +1,7 @@
-//! Phase 1 of a frame: every point goes into the sums of its end voxel.
+//! Phase 1's accumulation ([`Phase::Accumulate`](crate::Phase::Accumulate)) one point at a
+//! time: every point goes into the sums of its end voxel. The batches of `accumulate.rs`
+//! send the points they do not handle themselves here, and use the voxel lookup and the
+//! accumulators defined here.
 //!
 //! A point is checked (finite, non-zero, labels that fit the map), moved to world
 //! coordinates and quantised to its voxel key and offset. The first point of a voxel in the

@@ -1,17 +1,22 @@
 //! Frame integration: one frame of labelled points, or a depth image with labels, into the
-//! map. [`Map::integrate`] and [`Map::integrate_depth`] run the same steps:
+//! map. [`Map::integrate`] and [`Map::integrate_depth`] run the same steps, each phase
+//! ([`Phase`]) in the file of its name:
 //!
 //! 1. **validate the frame** (size, image, pose; an error leaves the map untouched) and
 //!    start its state (`frame.rs`);
-//! 2. **turn pixels into points** ([`crate::depth_point`], `camera.rs`), for depth images;
-//! 3. phase 1, **accumulate points per end voxel** (`accumulate.rs`): integer sums,
-//!    histogram votes of a hashed sample (`votes.rs`), the frame's list of touched blocks;
-//! 4. phase 2, **apply one update per touched voxel** (here): the list is sorted by key;
-//!    each voxel that received points decays to `n_max`, gets one hit and sets its vote
-//!    sampling for the next frame;
-//! 5. phase 3, **free space along the rays** (`free_space.rs`): one ray per unique end
-//!    voxel and per unique truncated end, in sorted order, at most one miss per traversed
-//!    voxel.
+//! 2. phase 1, **turn pixels into points** ([`Phase::Points`], `points.rs`): in batches of
+//!    64, world coordinates, voxel keys and offsets; pixels with the arithmetic of
+//!    [`crate::depth_point`] (`geometry/camera.rs`);
+//! 3. phase 1, **accumulate points per end voxel** ([`Phase::Accumulate`],
+//!    `accumulate.rs`, and `accumulate_point.rs` for one point at a time): integer sums,
+//!    histogram votes of a hashed sample (`storage/votes.rs`), the frame's list of touched
+//!    blocks; a full table evicts far entries (`evict.rs`);
+//! 4. phase 2, **apply one update per touched voxel** ([`Phase::EndVoxels`],
+//!    `end_voxels.rs`): the list is sorted by key; each voxel that received points decays
+//!    to `n_max`, gets one hit and sets its vote sampling for the next frame;
+//! 5. phase 3, **free space along the rays** ([`Phase::FreeSpace`], `free_space.rs`): one
+//!    ray per unique end voxel and per unique truncated end, in sorted order, at most one
+//!    miss per traversed voxel.
 //!
 //! Phase 1 only adds to integer sums and sets per-frame masks, and phases 2 and 3 go in
 //! key order, so the result does not depend on point order.

@@ -6,7 +6,7 @@
 //!    branches, which the compiler vectorises. They perform the same IEEE operations in
 //!    the same order as the scalar path ([`crate::depth_point`], `FrameState::to_world`,
 //!    `FrameState::quantise`), so the map is bit-identical;
-//! 2. **accumulate** ([`Phase::Accumulate`](crate::Phase::Accumulate), `sums.rs`): integer
+//! 2. **accumulate** ([`Phase::Accumulate`](crate::Phase::Accumulate), `accumulate.rs`): integer
 //!    sums per voxel and votes, one voxel lookup per voxel of the batch.
 
 use crate::config::Config;
@@ -42,7 +42,7 @@ pub(crate) const SLOW: u8 = 2;
 /// A pixel without a depth measurement (counted as `rejected_depth`).
 pub(crate) const NO_DEPTH: u8 = 3;
 
-/// Whether the accumulation takes points one by one (32-bit targets, see `sums.rs`) and
+/// Whether the accumulation takes points one by one (32-bit targets, see `accumulate.rs`) and
 /// packs them itself ([`Batch::packed`]); the conversion then leaves the 64-bit lanes.
 pub(crate) const PACK_PER_POINT: bool = cfg!(target_pointer_width = "32");
 

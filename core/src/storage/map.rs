@@ -1,6 +1,7 @@
 //! The map: its two fixed tables (occupancy blocks, NDT voxels), construction and the
 //! read-only queries. What changes the map lives with its concern: integration
-//! (`integrate.rs` and the phases it calls), eviction (`evict.rs`), snapshots.
+//! (`integrate/`, one file per phase), eviction (`integrate/evict.rs`), snapshots
+//! (`snapshot.rs`).
 
 use crate::config::{Config, MissModel, LOGODDS_ONE};
 use crate::error::Error;
