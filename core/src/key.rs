@@ -176,8 +176,8 @@ mod tests {
     extern crate std;
 
     use super::*;
+    use crate::storage::voxel::Voxel;
     use crate::testutil::*;
-    use crate::voxel::Voxel;
 
     use std::vec::Vec;
 

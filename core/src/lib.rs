@@ -28,21 +28,27 @@
 //!
 //! Each module uses only modules above it (the unit tests at the end of a module may use
 //! anything). Methods of [`Map`] are spread over the modules of their concern, and calls
-//! between them point up this list too.
+//! between them point up this list too. The folders say what a module is for: `geometry/`
+//! the numerics the others share, `storage/` what the map holds and its snapshot image,
+//! `integrate/` the stages a frame passes through (one file per [`Phase`], then the entry
+//! points in `integrate/mod.rs`), and `readout/` what is read back out along rays. A new
+//! stage of a frame goes in `integrate/`, a new way to read the map in `readout/`, and a
+//! change to what is stored or its format in `storage/`.
 //!
 //! | module | what it holds |
 //! |---|---|
 //! | `error`, `labels` | [`Error`] and the [`ConfigField`] it names; a point's top-k [`Labels`] and [`LabeledPoint`] |
 //! | `key` | [`VoxelKey`], packed table keys and the hash that orders them |
-//! | `crc`, `dda`, `sqrt`, `gaussian` | CRC-32; 3-D DDA voxel walk; the square root; [`Gaussian`], its prepared inverse with the eigenvalue floor |
-//! | `config`, `camera` | [`Config`]; [`Pinhole`], depth images, [`depth_point`], pose checks |
-//! | `table` | the fixed-capacity hash table with stable slots |
-//! | `block`, `voxel` | occupancy blocks; surface voxels: sums, decay, histogram |
-//! | `map`, `votes` | the [`Map`] struct and its queries; vote sampling of the histogram |
-//! | `evict`, `raycast`, `snapshot`, `splat` | eviction of far entries; [`Map::raycast`] and the ray-ellipsoid test; snapshots; an ellipsoid's pixel footprint |
-//! | `frame` | the state of one frame being integrated, [`FrameReport`] |
-//! | `accumulate`, `batch`, `sums`, `free_space` | integration phase 1 (points into sums and votes; the scalar path, and batches of 64 points in two vectorisable stages) and phase 3 (rays) |
-//! | `integrate`, `render` | [`Map::integrate`] and [`Map::integrate_depth`] as their steps; [`Map::render`] (each visible Gaussian drawn over its footprint) |
+//! | `config`, `crc` | [`Config`]; CRC-32 |
+//! | `geometry::{sqrt, dda, gaussian, camera}` | the square root; 3-D DDA voxel walk; [`Gaussian`], its prepared inverse with the eigenvalue floor; [`Pinhole`], depth images, [`depth_point`], pose checks |
+//! | `storage::table` | the fixed-capacity hash table with stable slots |
+//! | `storage::{block, voxel, votes}` | occupancy blocks; surface voxels: sums, decay, histogram; vote sampling of the histogram |
+//! | `storage::{map, snapshot}` | the [`Map`] struct and its queries; snapshots and their [`SnapshotHeader`] |
+//! | `integrate::{evict, frame}` | eviction of far entries when a table is full; the state of one frame being integrated, [`FrameReport`], [`Phase`] |
+//! | `integrate::{points, accumulate_point, accumulate}` | phase 1 in batches of 64 points: [`Phase::Points`] (pixels to world points, keys and offsets in vectorisable loops), then [`Phase::Accumulate`] (into voxel sums and votes; one point at a time in `accumulate_point`, which also holds the voxel lookup and accumulators) |
+//! | `integrate::{end_voxels, free_space}` | [`Phase::EndVoxels`] (one update per touched voxel); [`Phase::FreeSpace`] (rays, NDT-OM misses) |
+//! | `integrate` | [`Map::integrate`] and [`Map::integrate_depth`] as their steps |
+//! | `readout::{raycast, splat, render}` | [`Map::raycast`] and the ray-ellipsoid test; an ellipsoid's pixel footprint; [`Map::render`] (each visible Gaussian drawn over its footprint) |
 //!
 //! Integer formats, the snapshot layout and eviction are described in more depth in
 //! `docs/ARCHITECTURE.md`.
@@ -84,7 +90,7 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
-// The `std` feature only switches the square root to std's (see `sqrt.rs`).
+// The `std` feature only switches the square root to std's (see `geometry/sqrt.rs`).
 #[cfg(feature = "std")]
 extern crate std;
 
@@ -94,56 +100,38 @@ mod labels;
 
 mod key;
 
-mod crc;
-mod dda;
-mod gaussian;
-mod sqrt;
-
-mod camera;
 mod config;
+mod crc;
 
-mod table;
+mod geometry;
 
-mod block;
-mod voxel;
-
-mod map;
-mod votes;
-
-mod evict;
-mod raycast;
-mod snapshot;
-mod splat;
-
-mod frame;
-
-mod accumulate;
-mod batch;
-mod free_space;
-mod sums;
+mod storage;
 
 mod integrate;
-mod render;
+
+mod readout;
 
 #[cfg(test)]
 mod testutil;
 
-pub use camera::{
-    depth_point, pose_from_matrix, validate_pose, Depth, DepthImage, DepthKind, LabelImage, Pinhole,
-};
 pub use config::{Config, MissModel, LOGODDS_ONE};
 pub use crc::Crc32;
 pub use error::{ConfigField, Error};
-pub use frame::{FrameReport, Phase, MAX_FRAME_POINTS};
-pub use free_space::voxels_on_segment;
-pub use gaussian::Gaussian;
+pub use geometry::camera::{
+    depth_point, pose_from_matrix, validate_pose, Depth, DepthImage, DepthKind, LabelImage, Pinhole,
+};
+pub use geometry::gaussian::Gaussian;
+pub use integrate::frame::{FrameReport, Phase, MAX_FRAME_POINTS};
+pub use integrate::free_space::voxels_on_segment;
 pub use key::{VoxelKey, KEY_LIMIT};
 pub use labels::{LabeledPoint, Labels, MAX_TOP_K};
-pub use map::{
+pub use nalgebra::{Isometry3, Matrix3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
+pub use readout::raycast::RayHit;
+pub use readout::render::INVALID_LABEL;
+pub use storage::map::{
     Map, MapStats, Occupancy, VoxelView, BLOCK_BYTES, BLOCK_TABLE_BYTES, MAP_HEADER_BYTES,
 };
-pub use nalgebra::{Isometry3, Matrix3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
-pub use raycast::RayHit;
-pub use render::INVALID_LABEL;
-pub use snapshot::{SNAPSHOT_BLOCK_BYTES, SNAPSHOT_HEADER_BYTES, SNAPSHOT_VERSION};
-pub use votes::{next_vote_exponent, takes_vote, vote_hash, MAX_VOTE_EXPONENT};
+pub use storage::snapshot::{
+    SnapshotHeader, SNAPSHOT_BLOCK_BYTES, SNAPSHOT_HEADER_BYTES, SNAPSHOT_VERSION,
+};
+pub use storage::votes::{next_vote_exponent, takes_vote, vote_hash, MAX_VOTE_EXPONENT};

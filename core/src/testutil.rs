@@ -6,8 +6,8 @@
 extern crate std;
 
 use crate::crc::crc32;
-use crate::map::Map;
-use crate::voxel::Voxel;
+use crate::storage::map::Map;
+use crate::storage::voxel::Voxel;
 use crate::*;
 use std::vec::Vec;
 

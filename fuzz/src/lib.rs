@@ -2,7 +2,9 @@
 //! helpers, the map invariants every target asserts, and one validated frame through a
 //! small map.
 
-use sndt_core::{Config, DepthImage, Error, FrameReport, LabelImage, Map, Pinhole, KEY_LIMIT};
+use sndt_core::{
+    Config, DepthImage, Error, FrameReport, LabelImage, Map, Pinhole, SnapshotHeader, KEY_LIMIT,
+};
 use sndt_host::dataset::{Frame, Rays};
 
 /// Overwrites the last four bytes with the CRC-32 of everything before them, as
@@ -16,12 +18,23 @@ pub fn fix_crc(bytes: &mut [u8]) {
     }
 }
 
-/// The class count a snapshot header claims (bytes 6..8), 0 when too short.
+/// The class count a snapshot header claims, 0 when the header is unreadable.
 pub fn snapshot_classes(bytes: &[u8]) -> u16 {
-    match bytes.get(6..8) {
-        Some(b) => u16::from_le_bytes([b[0], b[1]]),
-        None => 0,
+    SnapshotHeader::read(bytes).map_or(0, |h| h.classes)
+}
+
+/// `bytes` as a map of `voxels` x `blocks` capacity writes it back (with its CRC): the
+/// reader ignores the writer's capacities, so an accepted snapshot must come back as this.
+/// Unchanged when the header is unreadable.
+pub fn with_capacities(bytes: &[u8], voxels: usize, blocks: usize) -> Vec<u8> {
+    let mut out = bytes.to_vec();
+    if let Ok(mut h) = SnapshotHeader::read(bytes) {
+        (h.voxel_capacity, h.block_capacity) = (voxels as u32, blocks as u32);
+        if h.write(&mut out).is_ok() {
+            fix_crc(&mut out);
+        }
     }
+    out
 }
 
 /// The map's snapshot, checking that `write_snapshot` fills exactly `snapshot_len()`

@@ -3,7 +3,7 @@
 
 use sndt_core::{
     Config, DepthImage, DepthKind, FrameReport, Isometry3, LabelImage, LabeledPoint, Labels, Map,
-    Pinhole, Point3, VoxelKey,
+    Pinhole, Point3, SnapshotHeader, VoxelKey,
 };
 
 /// The proptest config of every property test here, with `cases` cases. Failing cases
@@ -20,10 +20,6 @@ pub fn proptest_config(cases: u32) -> proptest::test_runner::Config {
         ..proptest::test_runner::Config::default()
     }
 }
-
-/// Byte offset of the `frames` counter in a snapshot header (magic 4, version 2, classes 2,
-/// capacities 8, config 60; see `core/src/snapshot.rs`).
-pub const SNAPSHOT_FRAMES_OFFSET: usize = 76;
 
 /// The map's snapshot in a `Vec` of exactly `snapshot_len()` bytes.
 pub fn snapshot<const V: usize, const B: usize, const C: usize>(map: &Map<V, B, C>) -> Vec<u8> {
@@ -43,9 +39,29 @@ pub fn snapshot<const V: usize, const B: usize, const C: usize>(map: &Map<V, B, 
 /// points were all rejected (which still counts as a frame) compares equal.
 pub fn content<const V: usize, const B: usize, const C: usize>(map: &Map<V, B, C>) -> Vec<u8> {
     let mut s = snapshot(map);
-    s[SNAPSHOT_FRAMES_OFFSET..SNAPSHOT_FRAMES_OFFSET + 4].fill(0);
-    s.truncate(s.len() - 4);
+    let mut header = SnapshotHeader::read(&s).expect("the map's own snapshot header");
+    header.frames = 0;
+    header
+        .write(&mut s)
+        .expect("a whole snapshot holds its header");
+    s.truncate(s.len() - 4); // the CRC, which covers the frame counter
     s
+}
+
+/// A snapshot with its header changed by `edit` and its CRC recomputed, so a reader gets
+/// past the checksum to the changed field (what a buggy writer could produce).
+pub fn edit_header(snap: &[u8], edit: impl FnOnce(&mut SnapshotHeader)) -> Vec<u8> {
+    let mut bytes = snap.to_vec();
+    let mut header = SnapshotHeader::read(&bytes).expect("a snapshot header to edit");
+    edit(&mut header);
+    header
+        .write(&mut bytes)
+        .expect("a whole snapshot holds its header");
+    let body = bytes.len() - 4;
+    let mut crc = sndt_core::Crc32::new();
+    crc.update(&bytes[..body]);
+    bytes[body..].copy_from_slice(&crc.finish().to_le_bytes());
+    bytes
 }
 
 /// Every point of a frame must land in exactly one of these counters.

@@ -427,23 +427,10 @@ fn map_new_replaces_every_invalid_config() {
 #[test]
 fn snapshot_with_absurd_max_range_is_refused() {
     let mut map = populated();
-    let mut bytes = snapshot(&*map);
-    // max_range: the tenth f32 of the header's config (offset 16 + 9 * 4).
-    bytes[52..56].copy_from_slice(&1e4f32.to_le_bytes());
-    let n = bytes.len() - 4;
-    let mut crc = sndt_core::Crc32::new();
-    crc.update(&bytes[..n]);
-    let crc = crc.finish();
-    bytes[n..].copy_from_slice(&crc.to_le_bytes());
-    assert_untouched(&mut map, Error::SnapshotCorrupt, |m| {
-        m.read_snapshot(&bytes)
-    });
+    let far = edit_header(&snapshot(&*map), |h| h.config.max_range = 1e4);
+    assert_untouched(&mut map, Error::SnapshotCorrupt, |m| m.read_snapshot(&far));
     // The same bytes with the old 20 m read back.
-    bytes[52..56].copy_from_slice(&20f32.to_le_bytes());
-    let mut crc = sndt_core::Crc32::new();
-    crc.update(&bytes[..n]);
-    let crc = crc.finish();
-    bytes[n..].copy_from_slice(&crc.to_le_bytes());
+    let bytes = edit_header(&far, |h| h.config.max_range = 20.0);
     map.read_snapshot(&bytes).unwrap();
 }
 

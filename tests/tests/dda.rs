@@ -158,9 +158,9 @@ proptest! {
     /// through, end voxel excluded, and the end voxel is occupied.
     ///
     /// For a single point the core casts to the quantised point `k + 1/2 + q / 2^Q` (voxel
-    /// units, `mean_in_voxel` in integrate.rs). The point is built in quanta as
-    /// `2^Q k + 2^(Q-1) + q + jitter` with `|q| <= 31`, `|jitter| <= 0.4`, so its key and `q`
-    /// are known exactly whatever the f32 rounding of the pose transform.
+    /// units, `mean_in_voxel` in `core/src/integrate/free_space.rs`). The point is built in
+    /// quanta as `2^Q k + 2^(Q-1) + q + jitter` with `|q| <= 31`, `|jitter| <= 0.4`, so its
+    /// key and `q` are known exactly whatever the f32 rounding of the pose transform.
     #[test]
     fn single_ray_clears_exactly_the_dda_voxels(
         sensor in [-1.5f32..1.5, -1.5f32..1.5, -1.5f32..1.5],

@@ -1,16 +1,12 @@
 //! Snapshots: round trip, corruption, truncation, buffer and class checks.
 
 use proptest::prelude::*;
-use sndt_core::{Config, Error, Isometry3, Map, MissModel, SNAPSHOT_HEADER_BYTES};
+use sndt_core::{Config, Error, Isometry3, Map, MissModel, SnapshotHeader, SNAPSHOT_HEADER_BYTES};
 use sndt_tests::*;
 use std::sync::OnceLock;
 
 const C: usize = 8;
 type Small = Map<512, 128, C>;
-
-/// Byte ranges of the header that the reader does not interpret: the writer's capacities
-/// (8..16) and the 4 padding bytes after the config (72..76).
-const IGNORED: [std::ops::Range<usize>; 2] = [8..16, 72..76];
 
 /// CRC-32 (IEEE, reflected, init and final xor 0xFFFFFFFF), written independently.
 fn crc32(data: &[u8]) -> u32 {
@@ -32,6 +28,14 @@ fn fix_crc(buf: &mut [u8]) {
     let n = buf.len() - 4;
     let crc = crc32(&buf[..n]);
     buf[n..].copy_from_slice(&crc.to_le_bytes());
+}
+
+/// A snapshot as a map of the given capacities writes it back: the reader ignores the
+/// writer's capacities, everything else must come back byte for byte.
+fn with_capacities(snap: &[u8], voxels: u32, blocks: u32) -> Vec<u8> {
+    edit_header(snap, |h| {
+        (h.voxel_capacity, h.block_capacity) = (voxels, blocks);
+    })
 }
 
 /// A small map with a bit of everything: two room frames (surface voxels, free space,
@@ -98,6 +102,13 @@ fn round_trip_is_byte_identical() {
     assert_eq!(copy.checksum(), map.checksum());
     assert_eq!(copy.config(), map.config());
     assert_eq!(copy.stats().frames, 3);
+    // Its header says what the map was built with, without loading it.
+    let header = SnapshotHeader::read(&snap).unwrap();
+    assert_eq!(header.config, config_with(MissModel::NdtOm));
+    assert_eq!((header.frames, header.classes), (3, C as u16));
+    assert_eq!((header.voxel_capacity, header.block_capacity), (512, 128));
+    assert_eq!(header.voxels as usize, map.len());
+    assert_eq!(header.blocks as usize, map.block_count());
     // Queries agree too.
     let cells: Vec<_> = map.cells().collect();
     assert_eq!(cells, copy.cells().collect::<Vec<_>>());
@@ -124,10 +135,7 @@ fn round_trip_is_byte_identical() {
     // Into a map with more capacity: same content (only the capacity fields differ).
     let mut big = sndt_host::semantic_map::boxed_map::<1024, 512, C>(Config::DEFAULT).unwrap();
     big.read_snapshot(&snap).unwrap();
-    let again = snapshot(&*big);
-    assert_eq!(again.len(), snap.len());
-    assert_eq!(again[..8], snap[..8]);
-    assert_eq!(again[16..again.len() - 4], snap[16..snap.len() - 4]);
+    assert_eq!(snapshot(&*big), with_capacities(&snap, 1024, 512));
 }
 
 #[test]
@@ -214,15 +222,15 @@ fn header_fields_are_checked() {
     };
     let cases: Vec<(&str, Vec<u8>)> = vec![
         ("miss model 7", corrupt(&|b| b[71] = 7)),
-        ("quant_bits 0", corrupt(&|b| b[68] = 0)),
+        (
+            "quant_bits 0",
+            edit_header(snap, |h| h.config.quant_bits = 0),
+        ),
         (
             "cell size NaN",
-            corrupt(&|b| b[16..20].copy_from_slice(&f32::NAN.to_le_bytes())),
+            edit_header(snap, |h| h.config.cell_size = f32::NAN),
         ),
-        (
-            "n_min 1",
-            corrupt(&|b| b[60..64].copy_from_slice(&1u32.to_le_bytes())),
-        ),
+        ("n_min 1", edit_header(snap, |h| h.config.n_min = 1)),
         (
             "first log-odds beyond the clamp",
             corrupt(&|b| {
@@ -262,10 +270,7 @@ fn header_fields_are_checked() {
         ),
         (
             "voxel count without records",
-            corrupt(&|b| {
-                let nv = u32::from_le_bytes(b[84..88].try_into().unwrap()) + 1;
-                b[84..88].copy_from_slice(&nv.to_le_bytes());
-            }),
+            edit_header(snap, |h| h.voxels += 1),
         ),
     ];
     for (what, bytes) in cases {
@@ -276,7 +281,7 @@ fn header_fields_are_checked() {
 
 /// Offset of voxel record `i` in a snapshot.
 fn voxel_offset(snap: &[u8], i: usize) -> usize {
-    let nb = u32::from_le_bytes(snap[80..84].try_into().unwrap()) as usize;
+    let nb = SnapshotHeader::read(snap).unwrap().blocks as usize;
     SNAPSHOT_HEADER_BYTES + nb * sndt_core::SNAPSHOT_BLOCK_BYTES + i * Small::SNAPSHOT_VOXEL_BYTES
 }
 
@@ -296,6 +301,34 @@ proptest! {
         prop_assert!(r.is_err(), "flip of byte {} by {:#x} accepted", i, xor);
         prop_assert_eq!(t.checksum(), before);
         prop_assert_eq!(&snapshot(&*t), other);
+        // The header alone never panics either, and a flip behind it leaves it as it was.
+        let header = SnapshotHeader::read(&bad);
+        if i >= SNAPSHOT_HEADER_BYTES {
+            prop_assert_eq!(header, SnapshotHeader::read(snap));
+        }
+    }
+
+    /// Any bytes, and any prefix of a snapshot: reading a header gives a header or a
+    /// snapshot error, never a panic, and `SnapshotTruncated` when it is too short.
+    #[test]
+    fn header_of_any_bytes_is_read_or_refused(
+        junk in prop::collection::vec(any::<u8>(), 0..200),
+        cut in any::<prop::sample::Index>(),
+    ) {
+        let (snap, _) = fixtures();
+        let prefix = &snap[..cut.index(snap.len())];
+        for bytes in [&junk[..], prefix] {
+            match SnapshotHeader::read(bytes) {
+                Ok(_) => prop_assert!(bytes.len() >= SNAPSHOT_HEADER_BYTES),
+                Err(e) if bytes.len() < SNAPSHOT_HEADER_BYTES => {
+                    prop_assert_eq!(e, Error::SnapshotTruncated);
+                }
+                Err(e) => prop_assert!(matches!(
+                    e,
+                    Error::SnapshotMagic | Error::SnapshotVersion | Error::SnapshotCorrupt
+                )),
+            }
+        }
     }
 
     /// Corruption behind a recomputed CRC (what a buggy writer could produce): never
@@ -318,14 +351,11 @@ proptest! {
             Ok(()) => {
                 assert_capacity(&*t);
                 let again = snapshot(&*t);
-                prop_assert_eq!(again.len(), bad.len());
-                let mut mask = vec![true; bad.len() - 4];
-                for r in IGNORED {
-                    mask[r].fill(false);
-                }
-                for (i, keep) in mask.iter().enumerate() {
-                    prop_assert!(!keep || again[i] == bad[i], "byte {} not reproduced", i);
-                }
+                prop_assert!(again == with_capacities(&bad, 512, 128), "not reproduced");
+                // Its header gives the config and frame count the map now has.
+                let header = SnapshotHeader::read(&bad).unwrap();
+                prop_assert_eq!(header.config, *t.config());
+                prop_assert_eq!(header.frames, t.stats().frames);
                 // The loaded map is usable.
                 let _ = t.integrate(&Isometry3::identity(), &[lp(0.1, 0.2, 1.0, 1)]);
                 assert_capacity(&*t);

@@ -22,7 +22,7 @@ use crate::output::ros::write::frame_time;
 use crate::semantic_map::{boxed_map, HostMap, SemanticMap};
 use anyhow::{anyhow, bail, Context, Result};
 use rayon::prelude::*;
-use sndt_core::{Config, DepthKind, Map};
+use sndt_core::{Config, DepthKind, Map, SnapshotHeader};
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -429,8 +429,9 @@ pub fn load_snapshot(path: &std::path::Path) -> Result<Box<HostMap>> {
     let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
     let mut map: Box<HostMap> = boxed_map(Config::DEFAULT).map_err(|e| anyhow!("{e}"))?;
     map.read_snapshot(&bytes).map_err(|e| {
-        let why = match (e, stored_config(&bytes).map(|c| c.validate())) {
-            (sndt_core::Error::SnapshotCorrupt, Some(Err(bad))) => {
+        let stored = SnapshotHeader::read(&bytes).map(|h| h.config.validate());
+        let why = match (e, stored) {
+            (sndt_core::Error::SnapshotCorrupt, Ok(Err(bad))) => {
                 format!("its stored config is refused: {bad}")
             }
             _ => e.to_string(),
@@ -438,49 +439,6 @@ pub fn load_snapshot(path: &std::path::Path) -> Result<Box<HostMap>> {
         anyhow!("{}: not a readable sndt snapshot: {why}", path.display())
     })?;
     Ok(map)
-}
-
-/// The config in a snapshot's header (`docs/ARCHITECTURE.md`, snapshot format: eleven
-/// `f32` from offset 16, `n_min` and `n_max` at 60 and 64, then the `u8` fields), unchecked;
-/// `None` when the header is too short or its miss model byte unknown.
-///
-/// ```
-/// use sndt_host::eval::evaluate::stored_config;
-/// let mut config = sndt_core::Config::with_cell_size(0.05);
-/// config.max_range = 7.5;
-/// let map = sndt_host::semantic_map::boxed_map::<64, 16, 40>(config).unwrap();
-/// let mut buf = vec![0; map.snapshot_len()];
-/// map.write_snapshot(&mut buf).unwrap();
-/// assert_eq!(stored_config(&buf), Some(config));
-/// ```
-pub fn stored_config(bytes: &[u8]) -> Option<Config> {
-    let header = bytes.get(..76)?;
-    let f = |k: usize| f32::from_le_bytes(header[16 + 4 * k..20 + 4 * k].try_into().unwrap());
-    let u = |o: usize| u32::from_le_bytes(header[o..o + 4].try_into().unwrap());
-    Some(Config {
-        cell_size: f(0),
-        eigen_ratio: f(1),
-        hit: f(2),
-        miss: f(3),
-        clamp_min: f(4),
-        clamp_max: f(5),
-        lambda: f(6),
-        noise_base: f(7),
-        noise_quadratic: f(8),
-        max_range: f(9),
-        render_radius: f(10),
-        n_min: u(60),
-        n_max: u(64),
-        quant_bits: header[68],
-        top_k: header[69],
-        min_score: header[70],
-        miss_model: match header[71] {
-            0 => sndt_core::MissModel::NdtOm,
-            1 => sndt_core::MissModel::Constant,
-            _ => return None,
-        },
-        votes_per_frame: header[72],
-    })
 }
 
 /// The evaluation's ground-truth depth: planar depth, with no-measurement pixels as 0

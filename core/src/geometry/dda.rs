@@ -1,5 +1,5 @@
 //! Exact voxel traversal (Amanatides & Woo, 1987) in voxel units, shared by free space
-//! (`free_space.rs`) and ray casting (`raycast.rs`).
+//! (`integrate/free_space.rs`) and ray casting (`readout/raycast.rs`).
 
 /// Walk state: the current voxel and, per axis, the ray parameter of the next boundary.
 pub(crate) struct Dda {
@@ -68,7 +68,7 @@ impl Dda {
 pub(crate) const LANES: usize = 8;
 
 /// The most steps [`lane_keys`] records per walk; longer walks go step by step. None on
-/// 32-bit targets, which walk step by step (see `free_space.rs`) and have little stack.
+/// 32-bit targets, which walk step by step (see `integrate/free_space.rs`) and have little stack.
 pub(crate) const LANE_STEPS: usize = if cfg!(target_pointer_width = "64") {
     256
 } else {

@@ -8,16 +8,16 @@
 //! ray passes to the Gaussian, and none when the ray ends before its closest approach, so
 //! grazing rays do not erase thin surfaces.
 
-use crate::block::bits;
 use crate::config::{to_fixed, Config, MissModel};
-use crate::dda::{lane_keys, Dda, LANES, LANE_STEPS};
-use crate::frame::FrameState;
-use crate::gaussian::{PrepCache, Prepared};
+use crate::geometry::dda::{lane_keys, Dda, LANES, LANE_STEPS};
+use crate::geometry::gaussian::{PrepCache, Prepared};
+use crate::geometry::sqrt::sqrt;
+use crate::integrate::frame::FrameState;
 use crate::key::{VoxelKey, KEY_LIMIT};
-use crate::map::Map;
-use crate::sqrt::sqrt;
-use crate::table::Entry;
-use crate::voxel::Voxel;
+use crate::storage::block::bits;
+use crate::storage::map::Map;
+use crate::storage::table::Entry;
+use crate::storage::voxel::Voxel;
 use nalgebra::Vector3;
 
 /// Prepared-Gaussian cache of phase 3 (voxel statistics no longer change then).

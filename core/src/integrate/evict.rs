@@ -7,10 +7,10 @@
 //! map's content and the sensor position, not on table order, and the scan is two passes
 //! over the table with a fixed-size histogram (no sorting, no allocation).
 
-use crate::block::{bits, Block};
 use crate::key::VoxelKey;
-use crate::map::Map;
-use crate::table::Entry;
+use crate::storage::block::{bits, Block};
+use crate::storage::map::Map;
+use crate::storage::table::Entry;
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// Evicts occupancy blocks (with their NDT voxels) farthest from `center`, not touched

@@ -180,9 +180,9 @@ fn to_pixel(v: f64) -> u32 {
 mod tests {
     extern crate std;
     use super::*;
-    use crate::camera::Pinhole;
-    use crate::gaussian::{floor_abs, Gaussian};
-    use crate::raycast::Prep;
+    use crate::geometry::camera::Pinhole;
+    use crate::geometry::gaussian::{floor_abs, Gaussian};
+    use crate::readout::raycast::Prep;
     use crate::testutil::Lcg;
     use nalgebra::{Rotation3, Vector3};
 

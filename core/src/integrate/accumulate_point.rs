@@ -1,4 +1,7 @@
-//! Phase 1 of a frame: every point goes into the sums of its end voxel.
+//! Phase 1's accumulation ([`Phase::Accumulate`](crate::Phase::Accumulate)) one point at a
+//! time: every point goes into the sums of its end voxel. The batches of `accumulate.rs`
+//! send the points they do not handle themselves here, and use the voxel lookup and the
+//! accumulators defined here.
 //!
 //! A point is checked (finite, non-zero, labels that fit the map), moved to world
 //! coordinates and quantised to its voxel key and offset. The first point of a voxel in the
@@ -8,13 +11,13 @@
 //! run) and added to the voxel once. A point votes if its labels do and the voxel's vote
 //! sample takes it. Points beyond max range only mark their truncated ray end (`far`).
 
-use crate::frame::{accumulator_index, Accumulator, FrameState};
+use crate::geometry::sqrt::sqrt;
+use crate::integrate::frame::{accumulator_index, Accumulator, FrameState};
 use crate::key::{axis_key, VoxelKey};
 use crate::labels::Labels;
-use crate::map::Map;
-use crate::sqrt::sqrt;
-use crate::votes::{vote_max, voting_classes};
-use crate::voxel::{packed_offsets, PackedSums, Voxel};
+use crate::storage::map::Map;
+use crate::storage::votes::{vote_max, voting_classes};
+use crate::storage::voxel::{packed_offsets, PackedSums, Voxel};
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// Phase 1 for one point `p` in the sensor frame; every point ends in exactly one

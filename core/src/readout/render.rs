@@ -13,17 +13,17 @@
 //! that neighbourhood. Two Gaussians entered at exactly the same distance are decided by
 //! [`Map::raycast`] for that pixel (it breaks the tie by key).
 
-use crate::block::bits;
-use crate::camera::{validate_pose, Pinhole};
 use crate::error::Error;
-use crate::gaussian::floor_abs;
+use crate::geometry::camera::{validate_pose, Pinhole};
+use crate::geometry::gaussian::floor_abs;
+use crate::geometry::sqrt::sqrt;
 use crate::key::VoxelKey;
-use crate::map::Map;
-use crate::raycast::{Lanes3, Prep, LANES};
-use crate::splat::{pixel_to_ray, Footprint};
-use crate::sqrt::sqrt;
-use crate::table::Entry;
-use crate::voxel::argmax;
+use crate::readout::raycast::{Lanes3, Prep, LANES};
+use crate::readout::splat::{pixel_to_ray, Footprint};
+use crate::storage::block::bits;
+use crate::storage::map::Map;
+use crate::storage::table::Entry;
+use crate::storage::voxel::argmax;
 use nalgebra::{Isometry3, Point3, Rotation3, Vector3};
 
 /// Label written by [`Map::render`] where a ray hits nothing (free space or unknown).
@@ -302,8 +302,8 @@ mod tests {
     extern crate std;
 
     use super::*;
-    use crate::gaussian::PrepCache;
-    use crate::raycast::tests::*;
+    use crate::geometry::gaussian::PrepCache;
+    use crate::readout::raycast::tests::*;
     use crate::testutil::*;
     use crate::*;
     use std::vec::Vec;

@@ -1,7 +1,7 @@
 //! A voxel's Gaussian: mean and covariance in metres, and its inverse prepared for ray
 //! tests with an eigenvalue floor (so flat and degenerate voxels stay invertible).
 
-use crate::sqrt::sqrt;
+use crate::geometry::sqrt::sqrt;
 use nalgebra::{Matrix3, Vector3};
 
 /// A voxel's normal distribution in world coordinates (metres).

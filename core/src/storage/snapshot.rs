@@ -18,16 +18,20 @@
 //!
 //! Blocks and voxels appear in canonical order (by key hash, then key), so equal maps give
 //! equal bytes whatever order they were built in, and duplicates are detectable.
+//!
+//! The header is read and written in one place, [`SnapshotHeader`], which
+//! [`Map::read_snapshot`] and [`Map::write_snapshot`] use too: code outside the core reads
+//! a snapshot's config or frame count through it, never by byte offset.
 
-use crate::block::Block;
 use crate::config::{to_fixed, Config, MissModel};
 use crate::crc::{crc32, Crc32};
 use crate::error::Error;
 use crate::key::{join_key, order, split_key, VoxelKey, KEY_LIMIT};
-use crate::map::{Map, MapStats};
-use crate::table::Entry;
-use crate::votes::MAX_VOTE_EXPONENT;
-use crate::voxel::{scatter, Voxel};
+use crate::storage::block::Block;
+use crate::storage::map::{Map, MapStats};
+use crate::storage::table::Entry;
+use crate::storage::votes::MAX_VOTE_EXPONENT;
+use crate::storage::voxel::{scatter, Voxel};
 
 /// Snapshot format version written by this build.
 pub const SNAPSHOT_VERSION: u16 = 2;
@@ -137,7 +141,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         }
         let mut w = Writer { buf, pos: 0 };
         let mut hdr = [0u8; SNAPSHOT_HEADER_BYTES];
-        self.write_header(&mut hdr);
+        self.snapshot_header().encode(&mut hdr);
         w.put(&hdr);
         let mut chunk = [0u8; 160];
         for b in self.blocks.canonical().filter_map(|s| self.blocks.get(s)) {
@@ -159,7 +163,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let mut chunk = [0u8; 160];
         // Header and records are streamed through a small stack buffer.
         let mut hdr = [0u8; SNAPSHOT_HEADER_BYTES];
-        self.write_header(&mut hdr);
+        self.snapshot_header().encode(&mut hdr);
         crc.update(&hdr);
         for b in self.blocks.canonical().filter_map(|s| self.blocks.get(s)) {
             crc.update(block_record(b, &mut chunk));
@@ -171,48 +175,17 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         crc.finish()
     }
 
-    fn write_header(&self, hdr: &mut [u8; SNAPSHOT_HEADER_BYTES]) {
-        let mut w = Writer { buf: hdr, pos: 0 };
-        let c = &self.config;
-        w.put(MAGIC);
-        w.put(&SNAPSHOT_VERSION.to_le_bytes());
-        w.put(&(C as u16).to_le_bytes());
-        w.put(&(V as u32).to_le_bytes());
-        w.put(&(B as u32).to_le_bytes());
-        for f in [
-            c.cell_size,
-            c.eigen_ratio,
-            c.hit,
-            c.miss,
-            c.clamp_min,
-            c.clamp_max,
-            c.lambda,
-            c.noise_base,
-            c.noise_quadratic,
-            c.max_range,
-            c.render_radius,
-        ] {
-            w.put(&f.to_bits().to_le_bytes());
+    /// The header of this map's snapshot.
+    fn snapshot_header(&self) -> SnapshotHeader {
+        SnapshotHeader {
+            classes: C as u16,
+            voxel_capacity: V as u32,
+            block_capacity: B as u32,
+            config: self.config,
+            frames: self.stats.frames,
+            blocks: self.blocks.len() as u32,
+            voxels: self.voxels.len() as u32,
         }
-        w.put(&c.n_min.to_le_bytes());
-        w.put(&c.n_max.to_le_bytes());
-        let model = match c.miss_model {
-            MissModel::NdtOm => 0u8,
-            MissModel::Constant => 1u8,
-        };
-        w.put(&[
-            c.quant_bits,
-            c.top_k,
-            c.min_score,
-            model,
-            c.votes_per_frame,
-            0,
-            0,
-            0,
-        ]);
-        w.put(&self.stats.frames.to_le_bytes());
-        w.put(&(self.blocks.len() as u32).to_le_bytes());
-        w.put(&(self.voxels.len() as u32).to_le_bytes());
     }
 
     /// Replaces the map's content with a snapshot. The whole snapshot is checked first
@@ -263,51 +236,38 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// config, then every block and voxel record.
     fn validate_snapshot(buf: &[u8]) -> Result<(Config, u32, usize, usize), Error> {
         let h = Self::read_header(buf)?;
-        Self::check_body(buf, &h)?;
+        let (nb, nv) = (h.fields.blocks as usize, h.fields.voxels as usize);
+        Self::check_body(buf, nb, nv)?;
         let config = h.checked_config()?;
         let mut r = Reader {
             buf,
             pos: SNAPSHOT_HEADER_BYTES,
         };
-        check_blocks(&mut r, h.blocks, h.voxels, &config)?;
-        Self::check_voxels(&mut r, h.blocks, h.voxels, &config)?;
-        Ok((config, h.frames, h.blocks, h.voxels))
+        check_blocks(&mut r, nb, nv, &config)?;
+        Self::check_voxels(&mut r, nb, nv, &config)?;
+        Ok((config, h.fields.frames, nb, nv))
     }
 
-    /// The header fields, after checking the magic, version, class count and reserved
-    /// bytes.
-    fn read_header(buf: &[u8]) -> Result<Header, Error> {
+    /// The header fields, after checking the length, magic, version, class count and
+    /// reserved bytes.
+    fn read_header(buf: &[u8]) -> Result<RawHeader, Error> {
         if buf.len() < SNAPSHOT_HEADER_BYTES + 4 {
             return Err(Error::SnapshotTruncated);
         }
-        let mut r = Reader { buf, pos: 0 };
-        if &r.take::<4>() != MAGIC {
-            return Err(Error::SnapshotMagic);
-        }
-        if r.u16() != SNAPSHOT_VERSION {
-            return Err(Error::SnapshotVersion);
-        }
-        if r.u16() as usize != C {
+        let h = RawHeader::decode(buf)?;
+        if h.fields.classes as usize != C {
             return Err(Error::SnapshotClasses);
         }
-        let _writer_capacity = (r.u32(), r.u32());
-        let (config, model) = read_config(&mut r);
-        if r.take::<3>() != [0; 3] {
-            return Err(Error::SnapshotCorrupt); // reserved bytes
+        if h.reserved != [0; 3] {
+            return Err(Error::SnapshotCorrupt);
         }
-        Ok(Header {
-            config,
-            model,
-            frames: r.u32(),
-            blocks: r.u32() as usize,
-            voxels: r.u32() as usize,
-        })
+        Ok(h)
     }
 
     /// The length the header implies, the CRC, and this map's capacity.
-    fn check_body(buf: &[u8], h: &Header) -> Result<(), Error> {
-        let expect = (h.blocks as u64) * SNAPSHOT_BLOCK_BYTES as u64
-            + (h.voxels as u64) * Self::SNAPSHOT_VOXEL_BYTES as u64
+    fn check_body(buf: &[u8], nb: usize, nv: usize) -> Result<(), Error> {
+        let expect = (nb as u64) * SNAPSHOT_BLOCK_BYTES as u64
+            + (nv as u64) * Self::SNAPSHOT_VOXEL_BYTES as u64
             + SNAPSHOT_HEADER_BYTES as u64
             + 4;
         if buf.len() as u64 != expect {
@@ -318,7 +278,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         if crc32(&buf[..body]) != stored {
             return Err(Error::SnapshotChecksum);
         }
-        if h.blocks > B || h.voxels > V {
+        if nb > B || nv > V {
             return Err(Error::SnapshotCapacity);
         }
         Ok(())
@@ -413,33 +373,211 @@ fn voxel_record_head<'a, const C: usize>(v: &Voxel<C>, out: &'a mut [u8; 160]) -
     w.written()
 }
 
-/// Header fields of a snapshot being read.
-struct Header {
-    /// The config as stored, its miss model not yet decoded.
-    config: Config,
-    /// The stored miss model byte.
-    model: u8,
-    frames: u32,
-    blocks: usize,
-    voxels: usize,
+/// A snapshot's header: the config and frame count of the map that wrote it, its class
+/// count and capacities, and how many records follow. Read it to learn what a snapshot
+/// holds without loading it (the [`Map`] type to read it into, the config a refused
+/// snapshot was written with).
+///
+/// ```
+/// use sndt_core::*;
+/// let mut config = Config::with_cell_size(0.05);
+/// config.max_range = 7.5;
+/// let mut map: Map<64, 16, 4> = Map::new(config);
+/// let p = [LabeledPoint::new(Point3::new(0.0, 0.0, 1.0), Labels::top1(2)); 5];
+/// map.integrate(&Isometry3::identity(), &p).unwrap();
+/// let mut buf = [0u8; 4096];
+/// let n = map.write_snapshot(&mut buf).unwrap();
+///
+/// let h = SnapshotHeader::read(&buf[..n]).unwrap();
+/// assert_eq!((h.config, h.frames, h.classes), (config, 1, 4));
+/// assert_eq!((h.voxel_capacity, h.block_capacity), (64, 16));
+/// assert_eq!((h.voxels as usize, h.blocks as usize), (map.len(), map.block_count()));
+/// assert_eq!(SnapshotHeader::read(&buf[..40]), Err(Error::SnapshotTruncated));
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SnapshotHeader {
+    /// Classes `C` of the writer; only a `Map<_, _, C>` reads the snapshot.
+    pub classes: u16,
+    /// Voxel capacity `V` of the writer (a reader needs room for `voxels` only).
+    pub voxel_capacity: u32,
+    /// Block capacity `B` of the writer (a reader needs room for `blocks` only).
+    pub block_capacity: u32,
+    /// The writer's config as stored, not validated: a snapshot whose config
+    /// [`Config::validate`] refuses does not load.
+    pub config: Config,
+    /// Frames integrated into the map ([`MapStats::frames`]).
+    pub frames: u32,
+    /// Block records after the header.
+    pub blocks: u32,
+    /// Voxel records after the blocks.
+    pub voxels: u32,
 }
 
-impl Header {
+impl SnapshotHeader {
+    /// Reads the header at the start of `bytes` (a snapshot, or at least its first
+    /// [`SNAPSHOT_HEADER_BYTES`]). It checks what decoding needs: the length
+    /// ([`Error::SnapshotTruncated`]), magic ([`Error::SnapshotMagic`]), version
+    /// ([`Error::SnapshotVersion`]), zero reserved bytes and a known miss model
+    /// ([`Error::SnapshotCorrupt`]). The class count, config, records and CRC are checked
+    /// by [`Map::read_snapshot`] only. Never panics.
+    ///
+    /// ```
+    /// use sndt_core::*;
+    /// let map: Map<64, 16, 4> = Map::new(Config::DEFAULT);
+    /// let mut buf = [0u8; 256];
+    /// let n = map.write_snapshot(&mut buf).unwrap();
+    /// assert_eq!(SnapshotHeader::read(&buf[..n]).unwrap().config, Config::DEFAULT);
+    /// buf[0] = b'X';
+    /// assert_eq!(SnapshotHeader::read(&buf[..n]), Err(Error::SnapshotMagic));
+    /// assert_eq!(SnapshotHeader::read(&[]), Err(Error::SnapshotTruncated));
+    /// ```
+    pub fn read(bytes: &[u8]) -> Result<SnapshotHeader, Error> {
+        let raw = RawHeader::decode(bytes)?;
+        if raw.reserved != [0; 3] {
+            return Err(Error::SnapshotCorrupt);
+        }
+        let mut h = raw.fields;
+        h.config.miss_model = miss_model(raw.model).ok_or(Error::SnapshotCorrupt)?;
+        Ok(h)
+    }
+
+    /// Writes the header into the first [`SNAPSHOT_HEADER_BYTES`] of `out`, as
+    /// [`Map::write_snapshot`] does, and returns that length, or
+    /// [`Error::BufferTooSmall`] (nothing written). The CRC at the end of a snapshot
+    /// covers the header: a snapshot whose header was changed loads only with a new CRC.
+    ///
+    /// ```
+    /// use sndt_core::*;
+    /// let map: Map<64, 16, 4> = Map::new(Config::DEFAULT);
+    /// let mut buf = [0u8; 256];
+    /// let n = map.write_snapshot(&mut buf).unwrap();
+    /// let mut h = SnapshotHeader::read(&buf[..n]).unwrap();
+    /// h.frames = 7;
+    /// assert_eq!(h.write(&mut buf), Ok(SNAPSHOT_HEADER_BYTES));
+    /// assert_eq!(SnapshotHeader::read(&buf[..n]).unwrap().frames, 7);
+    /// assert_eq!(h.write(&mut [0u8; 10]), Err(Error::BufferTooSmall));
+    /// ```
+    pub fn write(&self, out: &mut [u8]) -> Result<usize, Error> {
+        let dst = out
+            .get_mut(..SNAPSHOT_HEADER_BYTES)
+            .ok_or(Error::BufferTooSmall)?;
+        let mut hdr = [0u8; SNAPSHOT_HEADER_BYTES];
+        self.encode(&mut hdr);
+        dst.copy_from_slice(&hdr);
+        Ok(SNAPSHOT_HEADER_BYTES)
+    }
+
+    /// The header's bytes, in the layout of the module doc.
+    fn encode(&self, hdr: &mut [u8; SNAPSHOT_HEADER_BYTES]) {
+        let mut w = Writer { buf: hdr, pos: 0 };
+        let c = &self.config;
+        w.put(MAGIC);
+        w.put(&SNAPSHOT_VERSION.to_le_bytes());
+        w.put(&self.classes.to_le_bytes());
+        w.put(&self.voxel_capacity.to_le_bytes());
+        w.put(&self.block_capacity.to_le_bytes());
+        for f in [
+            c.cell_size,
+            c.eigen_ratio,
+            c.hit,
+            c.miss,
+            c.clamp_min,
+            c.clamp_max,
+            c.lambda,
+            c.noise_base,
+            c.noise_quadratic,
+            c.max_range,
+            c.render_radius,
+        ] {
+            w.put(&f.to_bits().to_le_bytes());
+        }
+        w.put(&c.n_min.to_le_bytes());
+        w.put(&c.n_max.to_le_bytes());
+        let model = match c.miss_model {
+            MissModel::NdtOm => 0u8,
+            MissModel::Constant => 1u8,
+        };
+        w.put(&[
+            c.quant_bits,
+            c.top_k,
+            c.min_score,
+            model,
+            c.votes_per_frame,
+            0,
+            0,
+            0,
+        ]);
+        w.put(&self.frames.to_le_bytes());
+        w.put(&self.blocks.to_le_bytes());
+        w.put(&self.voxels.to_le_bytes());
+    }
+}
+
+/// A header as stored, before the checks that depend on who reads it: a map checks its
+/// class count before the reserved bytes, and the miss model only after the CRC.
+struct RawHeader {
+    /// The fields; the config's miss model is not decoded yet (see `model`).
+    fields: SnapshotHeader,
+    /// The stored miss model byte.
+    model: u8,
+    /// The bytes after the config, which must be zero.
+    reserved: [u8; 3],
+}
+
+impl RawHeader {
+    /// Every header field, after checking the length, magic and version.
+    fn decode(buf: &[u8]) -> Result<RawHeader, Error> {
+        if buf.len() < SNAPSHOT_HEADER_BYTES {
+            return Err(Error::SnapshotTruncated);
+        }
+        let mut r = Reader { buf, pos: 0 };
+        if &r.take::<4>() != MAGIC {
+            return Err(Error::SnapshotMagic);
+        }
+        if r.u16() != SNAPSHOT_VERSION {
+            return Err(Error::SnapshotVersion);
+        }
+        let classes = r.u16();
+        let (voxel_capacity, block_capacity) = (r.u32(), r.u32());
+        let (config, model) = read_config(&mut r);
+        let reserved = r.take::<3>();
+        let fields = SnapshotHeader {
+            classes,
+            voxel_capacity,
+            block_capacity,
+            config,
+            frames: r.u32(),
+            blocks: r.u32(),
+            voxels: r.u32(),
+        };
+        Ok(RawHeader {
+            fields,
+            model,
+            reserved,
+        })
+    }
+
     /// The stored config with its miss model, if it is a valid config.
     fn checked_config(&self) -> Result<Config, Error> {
-        let mut c = self.config;
-        c.miss_model = match self.model {
-            0 => MissModel::NdtOm,
-            1 => MissModel::Constant,
-            _ => return Err(Error::SnapshotCorrupt),
-        };
+        let mut c = self.fields.config;
+        c.miss_model = miss_model(self.model).ok_or(Error::SnapshotCorrupt)?;
         c.validate().map_err(|_| Error::SnapshotCorrupt)?;
         Ok(c)
     }
 }
 
-/// The config fields in the order [`Map::write_snapshot`] writes them, and the miss model
-/// byte (decoded by [`Header::checked_config`]).
+/// The miss model a stored byte names.
+fn miss_model(byte: u8) -> Option<MissModel> {
+    match byte {
+        0 => Some(MissModel::NdtOm),
+        1 => Some(MissModel::Constant),
+        _ => None,
+    }
+}
+
+/// The config fields in the order [`SnapshotHeader::encode`] writes them, and the miss
+/// model byte (decoded by [`miss_model`]).
 fn read_config(r: &mut Reader) -> (Config, u8) {
     let mut c = Config::DEFAULT;
     c.cell_size = r.f32();
@@ -677,5 +815,65 @@ mod tests {
         fix_crc(&mut s);
         let mut copy: Map<16, 16, 1> = Map::new(Config::DEFAULT);
         assert_eq!(copy.read_snapshot(&s), Err(Error::SnapshotCorrupt));
+    }
+
+    /// The header of a real snapshot holds what the map was built with, and encoding it
+    /// gives the snapshot's first bytes (one encoder for both).
+    #[test]
+    fn header_of_a_real_snapshot() {
+        let mut config = Config::with_cell_size(0.07);
+        config.miss_model = MissModel::Constant;
+        config.votes_per_frame = 9;
+        config.n_max = 500;
+        let mut map: Map<64, 32, 3> = Map::new(config);
+        for z in [1.05, 1.25] {
+            map.integrate(&Isometry3::identity(), &[lp(0.05, 0.05, z, 2); 4])
+                .unwrap();
+        }
+        let s = snapshot(&map);
+        let h = SnapshotHeader::read(&s).unwrap();
+        let want = SnapshotHeader {
+            classes: 3,
+            voxel_capacity: 64,
+            block_capacity: 32,
+            config,
+            frames: 2,
+            blocks: map.block_count() as u32,
+            voxels: map.len() as u32,
+        };
+        assert_eq!(h, want);
+        assert_eq!(SnapshotHeader::read(&s[..SNAPSHOT_HEADER_BYTES]), Ok(want));
+        let mut out = [0u8; SNAPSHOT_HEADER_BYTES + 1];
+        assert_eq!(h.write(&mut out), Ok(SNAPSHOT_HEADER_BYTES));
+        assert_eq!(out[..SNAPSHOT_HEADER_BYTES], s[..SNAPSHOT_HEADER_BYTES]);
+        assert_eq!(out[SNAPSHOT_HEADER_BYTES], 0);
+    }
+
+    /// Short or corrupt headers give a snapshot error, never a panic; a config the map
+    /// would refuse is still read as stored.
+    #[test]
+    fn header_errors() {
+        let s = snapshot(&Map::<16, 16, 1>::new(Config::DEFAULT));
+        for n in 0..SNAPSHOT_HEADER_BYTES {
+            assert_eq!(SnapshotHeader::read(&s[..n]), Err(Error::SnapshotTruncated));
+        }
+        let edited = |at: usize, v: u8| {
+            let mut b = s.clone();
+            b[at] = v;
+            SnapshotHeader::read(&b)
+        };
+        assert_eq!(edited(0, b'X'), Err(Error::SnapshotMagic));
+        assert_eq!(edited(4, 9), Err(Error::SnapshotVersion));
+        assert_eq!(edited(71, 7), Err(Error::SnapshotCorrupt)); // miss model
+        assert_eq!(edited(74, 1), Err(Error::SnapshotCorrupt)); // reserved
+        assert_eq!(edited(68, 0).map(|h| h.config.quant_bits), Ok(0));
+        assert_eq!(edited(6, 40).map(|h| h.classes), Ok(40));
+        let mut junk = [0u8; SNAPSHOT_HEADER_BYTES];
+        for (i, b) in junk.iter_mut().enumerate() {
+            *b = (i * 37 % 251) as u8;
+        }
+        assert!(SnapshotHeader::read(&junk).is_err());
+        let h = SnapshotHeader::read(&s).unwrap();
+        assert_eq!(h.write(&mut []), Err(Error::BufferTooSmall));
     }
 }

@@ -9,9 +9,9 @@
 //! `sums_cannot_overflow` in the tests) and do not depend on point order.
 
 use crate::config::Config;
-use crate::gaussian::{floor_abs, Gaussian, Prepared};
+use crate::geometry::gaussian::{floor_abs, Gaussian, Prepared};
 use crate::key::{join_key, split_key, VoxelKey};
-use crate::table::Entry;
+use crate::storage::table::Entry;
 use nalgebra::{Matrix3, Vector3};
 
 /// A surface (NDT) voxel: point sums, class histogram, table link.

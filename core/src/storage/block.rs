@@ -7,7 +7,7 @@
 //! Gaussian and the histogram, and a block's `surface` mask says which cells have one.
 
 use crate::key::{join_key, split_key};
-use crate::table::Entry;
+use crate::storage::table::Entry;
 
 /// Log-odds value 0 = probability 0.5 = unknown.
 pub(crate) const UNKNOWN: i16 = 0;

@@ -1,14 +1,15 @@
 //! The map: its two fixed tables (occupancy blocks, NDT voxels), construction and the
 //! read-only queries. What changes the map lives with its concern: integration
-//! (`integrate.rs` and the phases it calls), eviction (`evict.rs`), snapshots.
+//! (`integrate/`, one file per phase), eviction (`integrate/evict.rs`), snapshots
+//! (`snapshot.rs`).
 
-use crate::block::Block;
 use crate::config::{Config, MissModel, LOGODDS_ONE};
 use crate::error::Error;
-use crate::gaussian::Gaussian;
+use crate::geometry::gaussian::Gaussian;
 use crate::key::VoxelKey;
-use crate::table::{Entry, Table};
-use crate::voxel::{argmax, Voxel};
+use crate::storage::block::Block;
+use crate::storage::table::{Entry, Table};
+use crate::storage::voxel::{argmax, Voxel};
 
 /// Bytes of one occupancy block (64 voxels) in the block table, hash index (a 4-byte
 /// bucket head per slot) included.

@@ -6,21 +6,21 @@
 //!    branches, which the compiler vectorises. They perform the same IEEE operations in
 //!    the same order as the scalar path ([`crate::depth_point`], `FrameState::to_world`,
 //!    `FrameState::quantise`), so the map is bit-identical;
-//! 2. **accumulate** ([`Phase::Accumulate`](crate::Phase::Accumulate), `sums.rs`): integer
+//! 2. **accumulate** ([`Phase::Accumulate`](crate::Phase::Accumulate), `accumulate.rs`): integer
 //!    sums per voxel and votes, one voxel lookup per voxel of the batch.
 
-use crate::camera::{mm_to_metres, Depth, DepthImage, DepthKind, LabelImage, PixelRays};
 use crate::config::Config;
+use crate::geometry::camera::{mm_to_metres, Depth, DepthImage, DepthKind, LabelImage, PixelRays};
+use crate::geometry::sqrt::sqrt;
 #[cfg(doc)]
-use crate::frame::Accumulator;
-use crate::frame::FrameState;
+use crate::integrate::frame::Accumulator;
+use crate::integrate::frame::FrameState;
 #[cfg(doc)]
 use crate::key::VoxelKey;
 use crate::key::KEY_LIMIT;
 use crate::labels::{LabeledPoint, Labels};
-use crate::sqrt::sqrt;
-use crate::votes::{vote_hash, voting_classes};
-use crate::voxel::packed_offsets;
+use crate::storage::votes::{vote_hash, voting_classes};
+use crate::storage::voxel::packed_offsets;
 
 /// Points per batch: large enough that the per-batch work vanishes, small enough for a
 /// microcontroller's stack (a batch is about 4 KiB).
@@ -42,7 +42,7 @@ pub(crate) const SLOW: u8 = 2;
 /// A pixel without a depth measurement (counted as `rejected_depth`).
 pub(crate) const NO_DEPTH: u8 = 3;
 
-/// Whether the accumulation takes points one by one (32-bit targets, see `sums.rs`) and
+/// Whether the accumulation takes points one by one (32-bit targets, see `accumulate.rs`) and
 /// packs them itself ([`Batch::packed`]); the conversion then leaves the 64-bit lanes.
 pub(crate) const PACK_PER_POINT: bool = cfg!(target_pointer_width = "32");
 
@@ -562,7 +562,7 @@ mod tests {
             let mut cfg = Config::with_cell_size(cell);
             cfg.max_range = Config::MAX_RAY_CELLS as f32 * cell;
             let mut map: std::boxed::Box<Map<64, 16, 4>> = std::boxed::Box::new(Map::new(cfg));
-            let reach = crate::frame::key_reach(Config::MAX_RAY_CELLS as f32);
+            let reach = crate::integrate::frame::key_reach(Config::MAX_RAY_CELLS as f32);
             let zone_edge = (KEY_LIMIT as f32 - reach) * cell;
             // A quaternion 0.05 % longer than a unit one (a rotation scaled by 1.001).
             let turn = UnitQuaternion::from_euler_angles(0.3, -0.2, 0.7).into_inner();

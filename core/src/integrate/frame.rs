@@ -5,16 +5,16 @@
 //! equals the frame's; the first touch of a block in a frame resets them and links the
 //! block into the frame's list, which phases 2 and 3 walk in key order.
 
-use crate::block::Block;
-use crate::camera::validate_pose;
 use crate::config::to_fixed;
 use crate::error::Error;
+use crate::geometry::camera::validate_pose;
 use crate::key::{axis_key, floor_i32, VoxelKey, KEY_LIMIT};
-use crate::map::Map;
-use crate::table::{Entry, NIL};
+use crate::storage::block::Block;
+use crate::storage::map::Map;
+use crate::storage::table::{Entry, NIL};
 #[cfg(doc)]
-use crate::votes::vote_max;
-use crate::voxel::PackedSums;
+use crate::storage::votes::vote_max;
+use crate::storage::voxel::PackedSums;
 use nalgebra::{Isometry3, Matrix3};
 
 /// Most points one frame may hold. With `quant_bits <= 6` and `n_max <= 65535` this bounds a

@@ -20,15 +20,15 @@
 //! non-finite, several voting classes) goes through the scalar `Map::add_point`, which
 //! handles and counts every case, at its place in the batch.
 
-use crate::batch::{Batch, BAD_LABEL, BATCH, FAST, NO_DEPTH, PACK_PER_POINT};
 #[cfg(doc)]
-use crate::frame::Accumulator;
-use crate::frame::{accumulator_index, FrameState};
+use crate::integrate::frame::Accumulator;
+use crate::integrate::frame::{accumulator_index, FrameState};
+use crate::integrate::points::{Batch, BAD_LABEL, BATCH, FAST, NO_DEPTH, PACK_PER_POINT};
 use crate::key::VoxelKey;
 use crate::labels::Labels;
-use crate::map::Map;
+use crate::storage::map::Map;
 #[cfg(doc)]
-use crate::voxel::packed_offsets;
+use crate::storage::voxel::packed_offsets;
 
 /// The accumulator index of points whose voxel could not be created (the map is full).
 const DROPPED: usize = usize::MAX;
@@ -48,7 +48,7 @@ const BY_POINTS: bool = PACK_PER_POINT;
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// The accumulation stage for a converted batch with its labels set; `labels(index)`
-    /// gives the labels of a point (see [`crate::batch::Source::index`]) for the scalar
+    /// gives the labels of a point (see [`crate::integrate::points::Source::index`]) for the scalar
     /// path.
     #[inline]
     pub(crate) fn accumulate(
@@ -433,7 +433,7 @@ mod tests {
         (reports, snapshot(&*map))
     }
 
-    /// The largest vote-sampling exponent of a voxel after `frames` (see `votes.rs`).
+    /// The largest vote-sampling exponent of a voxel after `frames` (see `storage/votes.rs`).
     fn most_sampled(frames: &[Vec<LabeledPoint>]) -> u8 {
         let mut cfg = Config::DEFAULT;
         cfg.votes_per_frame = 4;
@@ -443,7 +443,7 @@ mod tests {
         }
         let voxels = map.voxels.slots.iter();
         voxels
-            .map(crate::voxel::Voxel::vote_exponent)
+            .map(crate::storage::voxel::Voxel::vote_exponent)
             .max()
             .unwrap_or(0)
     }

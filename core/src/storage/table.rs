@@ -242,8 +242,8 @@ mod tests {
     extern crate std;
 
     use super::*;
+    use crate::storage::voxel::Voxel;
     use crate::testutil::*;
-    use crate::voxel::Voxel;
     use crate::*;
     use std::vec::Vec;
 

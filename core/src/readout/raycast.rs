@@ -13,13 +13,13 @@
 //! the pixels it covers), with the per-pixel test [`Prep::enter`] shared, so both give the
 //! same distances.
 
-use crate::block::bits;
-use crate::dda::Dda;
-use crate::gaussian::Prepared;
+use crate::geometry::dda::Dda;
+use crate::geometry::gaussian::Prepared;
+use crate::geometry::sqrt::sqrt;
 use crate::key::{VoxelKey, KEY_LIMIT};
-use crate::map::Map;
-use crate::sqrt::sqrt;
-use crate::voxel::argmax;
+use crate::storage::block::bits;
+use crate::storage::map::Map;
+use crate::storage::voxel::argmax;
 use nalgebra::{Matrix3, Point3, Vector3};
 
 /// Where a ray first enters an occupied Gaussian.
@@ -350,9 +350,9 @@ pub(crate) mod tests {
     extern crate std;
 
     use super::*;
-    use crate::block::Block;
-    use crate::gaussian::PrepCache;
-    use crate::table::Table;
+    use crate::geometry::gaussian::PrepCache;
+    use crate::storage::block::Block;
+    use crate::storage::table::Table;
     use crate::testutil::*;
     use crate::*;
     use std::boxed::Box;

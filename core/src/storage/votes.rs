@@ -9,7 +9,7 @@
 
 use crate::config::Config;
 use crate::labels::{Labels, MAX_TOP_K};
-use crate::voxel::Voxel;
+use crate::storage::voxel::Voxel;
 
 /// Largest count of votes taken in one frame that a tally holds.
 pub(crate) const VOTES_TAKEN_MAX: u16 = 0xfff;

@@ -2,8 +2,8 @@
 //! routine ([`depth_point`]) and sensor pose checks.
 
 use crate::error::Error;
+use crate::geometry::sqrt::sqrt;
 use crate::labels::Labels;
-use crate::sqrt::sqrt;
 use nalgebra::{Isometry3, Matrix3, Vector3};
 
 /// Pinhole intrinsics in pixels, OpenCV camera axes (x right, y down, z forward). Pixel

@@ -1,31 +1,46 @@
 //! Frame integration: one frame of labelled points, or a depth image with labels, into the
-//! map. [`Map::integrate`] and [`Map::integrate_depth`] run the same steps:
+//! map. [`Map::integrate`] and [`Map::integrate_depth`] run the same steps, each phase
+//! ([`Phase`]) in the file of its name:
 //!
 //! 1. **validate the frame** (size, image, pose; an error leaves the map untouched) and
 //!    start its state (`frame.rs`);
-//! 2. **turn pixels into points** ([`crate::depth_point`], `camera.rs`), for depth images;
-//! 3. phase 1, **accumulate points per end voxel** (`accumulate.rs`): integer sums,
-//!    histogram votes of a hashed sample (`votes.rs`), the frame's list of touched blocks;
-//! 4. phase 2, **apply one update per touched voxel** (here): the list is sorted by key;
-//!    each voxel that received points decays to `n_max`, gets one hit and sets its vote
-//!    sampling for the next frame;
-//! 5. phase 3, **free space along the rays** (`free_space.rs`): one ray per unique end
-//!    voxel and per unique truncated end, in sorted order, at most one miss per traversed
-//!    voxel.
+//! 2. phase 1, **turn pixels into points** ([`Phase::Points`], `points.rs`): in batches of
+//!    64, world coordinates, voxel keys and offsets; pixels with the arithmetic of
+//!    [`crate::depth_point`] (`geometry/camera.rs`);
+//! 3. phase 1, **accumulate points per end voxel** ([`Phase::Accumulate`],
+//!    `accumulate.rs`, and `accumulate_point.rs` for one point at a time): integer sums,
+//!    histogram votes of a hashed sample (`storage/votes.rs`), the frame's list of touched
+//!    blocks; a full table evicts far entries (`evict.rs`);
+//! 4. phase 2, **apply one update per touched voxel** ([`Phase::EndVoxels`],
+//!    `end_voxels.rs`): the list is sorted by key; each voxel that received points decays
+//!    to `n_max`, gets one hit and sets its vote sampling for the next frame;
+//! 5. phase 3, **free space along the rays** ([`Phase::FreeSpace`], `free_space.rs`): one
+//!    ray per unique end voxel and per unique truncated end, in sorted order, at most one
+//!    miss per traversed voxel.
 //!
 //! Phase 1 only adds to integer sums and sets per-frame masks, and phases 2 and 3 go in
 //! key order, so the result does not depend on point order.
 
-use crate::batch::{Batch, BATCH, TILE_COLS};
-use crate::block::bits;
-use crate::camera::{DepthImage, LabelImage, PixelRays};
-use crate::config::to_fixed;
+pub(crate) mod evict;
+
+pub(crate) mod frame;
+
+pub(crate) mod points;
+
+pub(crate) mod accumulate_point;
+
+pub(crate) mod accumulate;
+
+pub(crate) mod end_voxels;
+
+pub(crate) mod free_space;
+
 use crate::error::Error;
-use crate::frame::{FrameReport, FrameState, Phase, MAX_FRAME_POINTS};
-use crate::key::VoxelKey;
+use crate::geometry::camera::{DepthImage, LabelImage, PixelRays};
+use crate::integrate::frame::{FrameReport, FrameState, Phase, MAX_FRAME_POINTS};
+use crate::integrate::points::{Batch, BATCH, TILE_COLS};
 use crate::labels::{LabeledPoint, Labels};
-use crate::map::Map;
-use crate::table::Entry;
+use crate::storage::map::Map;
 use nalgebra::Isometry3;
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
@@ -179,28 +194,6 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         on_phase(Phase::Done);
         report
     }
-
-    /// Phase 2 along the sorted frame list from `head`: every voxel that received points
-    /// decays to `n_max`, ends its vote sample, and gets one hit.
-    fn update_end_voxels(&mut self, f: &mut FrameState, head: u32) {
-        let cfg = self.config;
-        let (lo, hi) = (to_fixed(cfg.clamp_min), to_fixed(cfg.clamp_max));
-        let hit = to_fixed(cfg.hit);
-        self.for_each_frame_block(head, |map, bs, b| {
-            for cell in bits(b.hit) {
-                let key = VoxelKey::from_block_cell(b.packed_key(), cell);
-                let found = map.voxels.find(key.packed());
-                if let Some(v) = found.and_then(|vs| map.voxels.get_mut(vs)) {
-                    v.decay(cfg.n_max);
-                    v.end_vote_sample(cfg.votes_per_frame);
-                }
-                if let Some(b) = map.blocks.get_mut(bs) {
-                    b.add_logodds(cell, hit, lo, hi);
-                }
-                f.report.end_voxels += 1;
-            }
-        });
-    }
 }
 
 #[cfg(test)]
@@ -208,6 +201,7 @@ mod tests {
     extern crate std;
 
     use super::*;
+    use crate::config::to_fixed;
     use crate::testutil::*;
     use crate::*;
     use std::vec::Vec;
@@ -332,7 +326,7 @@ mod tests {
 mod tile_tests {
     extern crate std;
 
-    use crate::camera::PixelRays;
+    use crate::geometry::camera::PixelRays;
     use crate::testutil::*;
     use crate::*;
     use std::vec::Vec;
