@@ -331,6 +331,83 @@ fn host_imports_point_down_its_declared_layers() {
     );
 }
 
+/// The core's modules by row of the "Modules, in dependency order" table of its crate
+/// doc: `| `a`, `b::{c, d}` | what |` gives `a`, `b::c` and `b::d` the row's number.
+fn core_rows(doc: &str) -> BTreeMap<String, u32> {
+    let mut rows = BTreeMap::new();
+    let table = section(doc, "//! ## Modules, in dependency order");
+    let body = table
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("//! | `"));
+    for (row, line) in (0u32..).zip(body) {
+        let first = line.split(" | ").next().unwrap_or("");
+        for name in format!("`{first}").split('`').skip(1).step_by(2) {
+            match name.split_once("::{") {
+                Some((parent, children)) => {
+                    for child in children.trim_end_matches('}').split(',') {
+                        rows.insert(format!("{parent}::{}", child.trim()), row);
+                    }
+                }
+                None => {
+                    rows.insert(name.to_string(), row);
+                }
+            }
+        }
+    }
+    rows
+}
+
+#[test]
+fn core_imports_point_up_its_module_table() {
+    let src = repo().join("core/src");
+    let lib = std::fs::read_to_string(src.join("lib.rs")).unwrap();
+    let rows = core_rows(&lib);
+    let graph = import_graph(&src);
+    // Every module is in the table, but the crate root, test helpers and folders whose
+    // mod.rs only declares the files in it.
+    let missing: Vec<&String> = graph
+        .keys()
+        .filter(|m| !m.is_empty() && *m != "testutil" && !rows.contains_key(*m))
+        .filter(|m| !rows.keys().any(|r| r.starts_with(&format!("{m}::"))))
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "core modules missing from lib.rs's table: {missing:?}"
+    );
+    // A module may use modules of its own row or rows above it ("in dependency order").
+    let mut down = Vec::new();
+    for (from, deps) in &graph {
+        let Some(a) = rows.get(from) else { continue };
+        for to in deps {
+            if let Some(b) = rows.get(to).filter(|b| *b > a) {
+                down.push(format!("{from} (row {a}) -> {to} (row {b})"));
+            }
+        }
+    }
+    assert!(
+        down.is_empty(),
+        "core imports that point down its module table:\n{}",
+        down.join("\n")
+    );
+}
+
+#[test]
+fn the_core_table_reader_expands_braces() {
+    let doc = "//! ## Modules, in dependency order\n//!\n//! | module | what |\n//! |---|---|\n//! | `error`, `labels` | e |\n//! | `geometry::{sqrt, dda}` | g |\n//! | `integrate` | i |\n//!\n//! ## Features\n//! | `x` | y |\n";
+    let rows = core_rows(doc);
+    let expected = [
+        ("error", 0),
+        ("labels", 0),
+        ("geometry::sqrt", 1),
+        ("geometry::dda", 1),
+        ("integrate", 2),
+    ];
+    assert_eq!(
+        rows,
+        expected.iter().map(|(m, r)| (m.to_string(), *r)).collect()
+    );
+}
+
 /// `(file, line, name, lines)` of every function longer than [`MAX_FN_LINES`].
 fn long_functions(dir: &Path) -> Vec<(String, usize, String, usize)> {
     let mut out = Vec::new();
