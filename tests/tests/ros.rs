@@ -405,7 +405,7 @@ fn sndt_map_writes_a_growing_map_bag_per_trajectory() {
     .unwrap();
     let options = EvalOptions {
         mcap: Some(dir.join("m.mcap")),
-        mcap_every: Some(2),
+        mcap_interval: Some(2),
         keep_maps: true,
         ..EvalOptions::new(Config::DEFAULT, LabelSource::Gt)
     };
