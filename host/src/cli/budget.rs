@@ -10,6 +10,9 @@ use std::path::PathBuf;
 
 /// Arguments of `sndt budget`.
 #[derive(clap::Args, Clone, Debug)]
+#[command(after_help = "Examples:
+  sndt budget --capacity 4096 --blocks 512 --cell 0.1
+  sndt budget data/synth --capacity 16384")]
 pub struct BudgetArgs {
     /// Dataset whose trajectories to simulate at this capacity: a directory (prepared
     /// layout or raw Hypersim), a ROS 2 bag (`.mcap`) or `synthetic[:SCENES:FRAMES]`

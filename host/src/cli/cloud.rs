@@ -9,6 +9,8 @@ use std::path::{Path, PathBuf};
 
 /// Arguments of `sndt cloud`.
 #[derive(clap::Args, Clone, Debug)]
+#[command(after_help = "Example:
+  sndt cloud data/synth --frame synth_00_living/cam_00/0000 --out out/frame.ply")]
 pub struct CloudArgs {
     /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`) or
     /// `synthetic[:SCENES:FRAMES]` (rendered on the fly).

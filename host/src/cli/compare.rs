@@ -16,6 +16,8 @@ use std::fmt;
 
 /// Arguments of `sndt compare`.
 #[derive(clap::Args, Clone, Debug)]
+#[command(after_help = "Example:
+  sndt compare synthetic --cell 0.05,0.1 --frames 0..20")]
 pub struct CompareArgs {
     /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`) or
     /// `synthetic[:SCENES:FRAMES]` (rendered on the fly); `synthetic` alone is its first scene.

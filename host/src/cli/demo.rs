@@ -17,6 +17,8 @@ use std::time::Instant;
 
 /// Arguments of `sndt demo`.
 #[derive(clap::Args, Clone, Debug, PartialEq)]
+#[command(after_help = "Example:
+  sndt demo --cell 0.05 --scenes 1 --frames-per-scene 10 --out out/demo")]
 pub struct DemoArgs {
     /// Output directory for pictures, back-projections and metrics.
     #[arg(long, default_value = "out/demo")]

@@ -21,6 +21,9 @@ use std::path::{Path, PathBuf};
 
 /// Arguments of `sndt export`.
 #[derive(clap::Args, Clone, Debug)]
+#[command(after_help = "Examples:
+  sndt export out/map/maps/synth_00_living_cam_00.sndt --ply out/map.ply --ellipsoids 1
+  sndt export synthetic:1:20 --cell 0.05 --mcap out/map.mcap --mcap-interval 5")]
 pub struct ExportArgs {
     /// A map snapshot (`.sndt`, from `sndt map --save-maps`), or a dataset whose first
     /// trajectory is mapped: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`) or

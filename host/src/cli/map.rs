@@ -14,6 +14,9 @@ use std::path::{Path, PathBuf};
 
 /// Arguments of `sndt map`.
 #[derive(clap::Args, Clone, Debug)]
+#[command(after_help = "Examples:
+  sndt map synthetic:2:20 --cell 0.05 --save-maps --out out/map
+  sndt map robot.mcap --every 2 --world-frame odom --mcap out/robot/map.mcap --mcap-interval 10")]
 pub struct MapArgs {
     /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`) or
     /// `synthetic[:SCENES:FRAMES]` (rendered on the fly).

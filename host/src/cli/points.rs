@@ -16,6 +16,8 @@ use std::path::PathBuf;
 
 /// Arguments of `sndt points`.
 #[derive(clap::Args, Clone, Debug)]
+#[command(after_help = "Example:
+  sndt points data/synth --frames 0..12 --out out/points.bin")]
 pub struct PointsArgs {
     /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`) or
     /// `synthetic[:SCENES:FRAMES]` (rendered on the fly).

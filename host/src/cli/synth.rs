@@ -15,6 +15,8 @@ use std::time::Instant;
 
 /// Arguments of `sndt synth`.
 #[derive(clap::Args, Clone, Debug)]
+#[command(after_help = "Example:
+  sndt synth --out data/synth --scenes 2 --frames-per-scene 20 --no-predictions")]
 pub struct SynthArgs {
     /// Output directory (the dataset root) of the prepared layout.
     #[arg(long, required_unless_present = "mcap")]
