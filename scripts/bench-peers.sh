@@ -4,8 +4,8 @@
 # (median of 12 frames, min-max in parentheses) and the ratio sndt / OctoMap.
 #
 # Both sides: the same 12 consecutive 1024x768 frames of the synthetic living room
-# (`sndt synth --scenes 1 --frames 12 --no-predictions`), the same world points (`sndt
-# points` exports exactly what the core integrates), max range 20 m, the same cell size,
+# (`sndt synth --scenes 1 --frames-per-scene 12 --no-predictions`), the same world points
+# (`sndt points` exports exactly what the core integrates), max range 20 m, the same cell size,
 # one thread pinned to the same CPU, a warm-up pass then a timed pass, only the map
 # update inside the clock (no I/O, no evaluation). sndt: `integrate_depth` with
 # ground-truth labels (statistics, classes and free space), host/benches/peers.rs.
@@ -64,7 +64,7 @@ if [ -f "$DATA/test.txt" ] && [ "$(wc -l <"$DATA/test.txt")" -eq "$FRAMES" ]; th
 else
     rm -rf "$DATA"
     cargo run --release --quiet -p sndt-host --bin sndt -- \
-        synth --out "$DATA" --scenes 1 --frames "$FRAMES" --no-predictions
+        synth --out "$DATA" --scenes 1 --frames-per-scene "$FRAMES" --no-predictions
 fi
 
 step "world points for OctoMap ($POINTS)"

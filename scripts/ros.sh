@@ -29,7 +29,7 @@ step "a synthetic trajectory: prepared layout (sndt synth) and a bag written by 
 cargo build -q -p sndt-host --bin sndt
 SNDT=target/debug/sndt
 rm -rf "$WORK" && mkdir -p "$WORK"
-"$SNDT" synth --scenes 1 --frames 8 --no-predictions --out "$WORK/prepared" >/dev/null
+"$SNDT" synth --scenes 1 --frames-per-scene 8 --no-predictions --out "$WORK/prepared" >/dev/null
 "$VENV/bin/python" scripts/ros/bag_from_prepared.py "$WORK/prepared" synth_00_living/cam_00 "$WORK/python.mcap"
 "$SNDT" info "$WORK/python.mcap"
 
@@ -46,6 +46,6 @@ if ! cmp -s "$bag_map" "$layout_map"; then
 fi
 
 step "sndt export --mcap, read back by Python"
-"$SNDT" export "$WORK/python.mcap" --mcap "$WORK/map.mcap" --ply "$WORK/map.ply" --every 3
+"$SNDT" export "$WORK/python.mcap" --mcap "$WORK/map.mcap" --ply "$WORK/map.ply" --mcap-interval 3
 "$VENV/bin/python" scripts/ros/check_map_bag.py "$WORK/map.mcap" "$WORK/map.ply" 3
 echo "ros bags: ok"

@@ -3,8 +3,8 @@
 //! the script to put beside OctoMap's on the same points.
 //!
 //! `cargo bench -p sndt-host --bench peers -- DATASET [FRAMES]` opens `DATASET` (a
-//! prepared layout, e.g. what `sndt synth --scenes 1 --frames 12 --no-predictions`
-//! writes, or `synthetic[:S:F]`), loads its first `FRAMES` frames (default 12) into
+//! prepared layout, e.g. what `sndt synth --scenes 1 --frames-per-scene 12
+//! --no-predictions` writes, or `synthetic[:S:F]`), loads its first `FRAMES` frames (default 12) into
 //! memory and, per cell size (5, 10, 20 cm), single thread:
 //! - a warm-up pass into a fresh heap map ([`HostMap`]), then `reset`, so the timed pass
 //!   finds the map's memory touched;

@@ -1,5 +1,5 @@
 //! Update time of the S-NDT map, in total and per phase, on 12 consecutive 1024x768 frames
-//! of the synthetic living room (the frames `sndt synth --scenes 1 --frames 12
+//! of the synthetic living room (the frames `sndt synth --scenes 1 --frames-per-scene 12
 //! --no-predictions` writes, here with exact depth and ground-truth labels).
 //!
 //! `cargo bench -p sndt-host --bench update [-- CELL...]` prints, per cell size (default

@@ -30,14 +30,27 @@ fn bad_option_values_are_refused_naming_the_option() {
         );
     }
     assert!(!std::path::Path::new(ply).exists(), "nothing written");
-    let cases: [(&[&str], &str, &str); 6] = [
+    let cases: [(&[&str], &str, &str); 8] = [
         (&["map", "synthetic:1:2", "--cell", "0"], "--cell", "> 0"),
         (&["map", "synthetic:1:2", "--cell", "NaN"], "--cell", "> 0"),
         (&["map", "synthetic:1:2", "--stride", "0"], "--stride", "0"),
+        (&["map", "synthetic:1:2", "--every", "0"], "--every", "0"),
         (
-            &["map", "synthetic:1:2", "--mcap", "m.mcap", "--every", "0"],
-            "--every",
+            &[
+                "map",
+                "synthetic:1:2",
+                "--mcap",
+                "m.mcap",
+                "--mcap-interval",
+                "0",
+            ],
+            "--mcap-interval",
             "0",
+        ),
+        (
+            &["compare", "synthetic", "--cell", "0.1,0"],
+            "--cell",
+            "> 0",
         ),
         (
             &["experiment", "synthetic:1:2", "--cells", "0.1,-1"],
@@ -343,6 +356,142 @@ fn a_snapshot_with_an_absurd_max_range_is_refused() {
         "{err}"
     );
     assert!(!ply.exists());
+}
+
+/// The map snapshots (`/sndt/map/points` messages) in the map bag `path`.
+fn map_bag_snapshots(path: &Path) -> usize {
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .filter(|m| m.as_ref().unwrap().channel.topic == sndt_host::output::ros::export::POINTS)
+        .count()
+}
+
+#[test]
+fn map_every_takes_every_kth_frame_and_mcap_interval_writes_the_growing_map() {
+    let root = prepared("every", 1, 4);
+    let (code, out, err) = map(&root, &[]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("4 frames mapped, 0 skipped"), "{out}");
+    // `--every` was the map bag's interval before it was `--mcap-interval`; now it
+    // subsamples the frames, as in `sndt experiment`.
+    let bag = root.with_file_name("every.mcap");
+    let bag_arg = bag.to_str().unwrap();
+    let (code, out, err) = map(&root, &["--every", "2", "--mcap", bag_arg]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("2 frames mapped, 0 skipped"), "{out}");
+    assert_eq!(map_bag_snapshots(&bag), 1, "the map after the last frame");
+    let (code, out, err) = map(&root, &["--mcap", bag_arg, "--mcap-interval", "2"]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert_eq!(map_bag_snapshots(&bag), 2, "after frames 2 and 4");
+    let (code, out, err) = map(
+        &root,
+        &["--every", "2", "--mcap", bag_arg, "--mcap-interval", "1"],
+    );
+    assert_eq!(code, 0, "{out}{err}");
+    assert_eq!(
+        map_bag_snapshots(&bag),
+        2,
+        "after each of the 2 frames mapped"
+    );
+}
+
+#[test]
+fn export_takes_every_and_mcap_interval_as_map_does() {
+    let root = prepared("export-every", 1, 4);
+    let bag = root.with_file_name("export.mcap");
+    let mut args = vec![
+        "export",
+        root.to_str().unwrap(),
+        "--mcap",
+        bag.to_str().unwrap(),
+    ];
+    args.extend(["--every", "2", "--mcap-interval", "1"]);
+    let (code, out, err) = sndt_out(&args);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        out.contains("mapped synth_00_living/cam_00: 2 frames, 0 skipped")
+            && out.contains(": 2 map snapshots"),
+        "{out}"
+    );
+}
+
+/// The warning `parse::renamed` prints for a deprecated spelling.
+fn deprecated(old: &str, new: &str) -> String {
+    format!("warning: {old} is deprecated and will be removed; use {new}")
+}
+
+#[test]
+fn synth_and_demo_take_the_deprecated_frames_with_a_warning() {
+    let dir = temp_dir("frames");
+    let data = dir.join("data");
+    let mut args = vec!["synth", "--scenes", "1", "--no-predictions"];
+    args.extend(["--out", data.to_str().unwrap(), "--frames", "2"]);
+    let (code, out, err) = sndt_out(&args);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        err.contains(&deprecated("--frames", "--frames-per-scene")),
+        "{err}"
+    );
+    assert!(out.contains("2 frames in "), "{out}");
+    args.extend(["--frames-per-scene", "3"]);
+    let (code, _, err) = sndt_out(&args);
+    assert_eq!(code, 2, "both spellings at once: {err}");
+    let demo = dir.join("demo");
+    let mut args = vec!["demo", "--scenes", "1", "--cell", "0.2", "--frames", "1"];
+    args.extend(["--out", demo.to_str().unwrap()]);
+    let (code, out, err) = sndt_out(&args);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        err.contains(&deprecated("--frames", "--frames-per-scene")),
+        "{err}"
+    );
+    assert!(out.contains(": 1 frames)"), "one frame of the walk: {out}");
+}
+
+#[test]
+fn points_selects_frames_as_compare_does_and_budget_and_cloud_take_any_dataset() {
+    let root = prepared("points", 1, 4);
+    let file = root.with_file_name("points.bin");
+    let mut args = vec![
+        "points",
+        root.to_str().unwrap(),
+        "--out",
+        file.to_str().unwrap(),
+    ];
+    args.extend(["--frames", "1..3"]);
+    let (code, out, err) = sndt_out(&args);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains(": 2 frames, "), "{out}");
+    args[5] = "5";
+    let (code, _, err) = sndt_out(&args);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("--frames 5: need a non-empty range within the 4 frames"),
+        "{err}"
+    );
+    let dir = root.to_str().unwrap();
+    let (code, new, err) = sndt_out(&["budget", dir, "--capacity", "4096"]);
+    assert_eq!(code, 0, "{new}{err}");
+    assert!(new.contains("| synth_00_living/cam_00 | 4 |"), "{new}");
+    let (code, old, err) = sndt_out(&["budget", "--dataset", dir, "--capacity", "4096"]);
+    assert_eq!(code, 0, "{old}{err}");
+    assert!(
+        err.contains(&deprecated("--dataset DIR", "the DATASET argument")),
+        "{err}"
+    );
+    assert_eq!(old, new);
+    // A DATASET is `synthetic[:SCENES:FRAMES]` too, for budget and cloud as for map.
+    let (code, out, err) = sndt_out(&["budget", "synthetic:1:2", "--capacity", "4096"]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("| synth_00_living/cam_00 | 2 |"), "{out}");
+    let ply = root.with_file_name("frame.ply");
+    let frame = "synth_00_living/cam_00/0001";
+    let mut args = vec!["cloud", "synthetic:1:2", "--frame", frame];
+    args.extend(["--out", ply.to_str().unwrap()]);
+    let (code, out, err) = sndt_out(&args);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(ply.is_file(), "{out}");
 }
 
 #[test]

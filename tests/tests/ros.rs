@@ -67,6 +67,13 @@ fn a_bag_gives_the_prepared_layouts_frames_and_map() {
     let (ca, cb) = (checksum(prepared.as_ref()), checksum(bag.as_ref()));
     println!("snapshot crc: prepared {ca:#010x}, bag {cb:#010x}");
     assert_eq!(ca, cb);
+    // Every k-th frame (`--every`) keeps the recording's stamps, which a map bag
+    // (`--mcap`) is stamped with.
+    let stamps: Vec<Option<u64>> = bag.frames().iter().map(|id| bag.stamp(id)).collect();
+    let every = sndt_host::dataset::Every::new(bag, 2);
+    let kept: Vec<Option<u64>> = every.frames().iter().map(|id| every.stamp(id)).collect();
+    assert!(stamps.iter().all(Option::is_some), "{stamps:?}");
+    assert_eq!(kept, [stamps[0], stamps[2]]);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -398,7 +405,7 @@ fn sndt_map_writes_a_growing_map_bag_per_trajectory() {
     .unwrap();
     let options = EvalOptions {
         mcap: Some(dir.join("m.mcap")),
-        mcap_every: Some(2),
+        mcap_interval: Some(2),
         keep_maps: true,
         ..EvalOptions::new(Config::DEFAULT, LabelSource::Gt)
     };

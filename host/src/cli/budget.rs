@@ -1,7 +1,7 @@
 //! `sndt budget`: the exact memory of a `Map<N, B, K>` and, given a dataset, the peak
 //! occupancy and evictions of each trajectory at that capacity.
 
-use crate::dataset::open::open;
+use crate::dataset::open::open_spec;
 use crate::dataset::source::OpenOptions;
 use crate::embedded::budget::{pick_capacity, report, simulate_dataset, table, CAPACITIES};
 use anyhow::{bail, Result};
@@ -10,7 +10,14 @@ use std::path::PathBuf;
 
 /// Arguments of `sndt budget`.
 #[derive(clap::Args, Clone, Debug)]
+#[command(after_help = "Examples:
+  sndt budget --capacity 4096 --blocks 512 --cell 0.1
+  sndt budget data/synth --capacity 16384")]
 pub struct BudgetArgs {
+    /// Dataset whose trajectories to simulate at this capacity: a directory (prepared
+    /// layout or raw Hypersim), a ROS 2 bag (`.mcap`) or `synthetic[:SCENES:FRAMES]`
+    /// (rendered on the fly).
+    pub dataset: Option<PathBuf>,
     /// Voxel edge in metres.
     #[arg(long, default_value_t = 0.10, value_parser = super::parse::positive)]
     pub cell: f32,
@@ -23,13 +30,13 @@ pub struct BudgetArgs {
     /// Occupancy block capacity B (default N / 8).
     #[arg(long)]
     pub blocks: Option<usize>,
-    /// Dataset directory: simulate each trajectory at this capacity.
-    #[arg(long)]
-    pub dataset: Option<PathBuf>,
+    /// Deprecated spelling of the DATASET argument.
+    #[arg(long = "dataset", hide = true, conflicts_with = "dataset")]
+    pub dataset_option: Option<PathBuf>,
     /// Split of the prepared layout.
-    #[arg(long)]
-    pub split: Option<String>,
-    /// Use every stride-th pixel of the dataset frames.
+    #[arg(long, default_value = "test")]
+    pub split: String,
+    /// Use every stride-th pixel in both directions of the dataset's frames (1 = all).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     pub stride: u32,
 }
@@ -47,8 +54,9 @@ pub fn run(a: &BudgetArgs) -> Result<()> {
 ///
 /// ```
 /// use sndt_host::cli::budget::{budget, BudgetArgs};
-/// let mut a = BudgetArgs { cell: 0.1, classes: 40, capacity: 4096, blocks: Some(512),
-///                          dataset: None, split: None, stride: 1 };
+/// let mut a = BudgetArgs { dataset: None, cell: 0.1, classes: 40, capacity: 4096,
+///                          blocks: Some(512), dataset_option: None, split: "test".into(),
+///                          stride: 1 };
 /// assert!(budget(&a).unwrap().contains("= 485504 bytes"));
 /// a.classes = 0;
 /// assert!(budget(&a).is_err());
@@ -63,7 +71,13 @@ pub fn budget(a: &BudgetArgs) -> Result<String> {
     }
     let blocks = a.blocks.unwrap_or(capacity.div_ceil(8)).max(1);
     let mut s = report(cell, classes, capacity, blocks);
-    let Some(root) = a.dataset.as_deref() else {
+    let dataset = super::parse::renamed(
+        a.dataset.clone(),
+        a.dataset_option.clone().map(Some),
+        "--dataset DIR",
+        "the DATASET argument",
+    );
+    let Some(root) = dataset.as_deref() else {
         return Ok(s);
     };
     let config = Config::with_cell_size(cell);
@@ -75,10 +89,10 @@ pub fn budget(a: &BudgetArgs) -> Result<String> {
         );
     };
     let options = OpenOptions {
-        split: a.split.clone(),
+        split: Some(a.split.clone()),
         ..Default::default()
     };
-    let ds = open(root, &options)?;
+    let ds = open_spec(&root.to_string_lossy(), &options)?;
     s += &format!("\n{}\n", ds.describe());
     if cap != (capacity, blocks) {
         s += &format!(

@@ -1,7 +1,7 @@
 //! `sndt cloud`: one frame's world points, coloured by label, as a PLY point cloud.
 
 use crate::dataset::frame::FrameId;
-use crate::dataset::open::open;
+use crate::dataset::open::open_spec;
 use crate::dataset::source::OpenOptions;
 use crate::output::ply::{write_frame_cloud, CloudSummary};
 use anyhow::{Context, Result};
@@ -9,8 +9,11 @@ use std::path::{Path, PathBuf};
 
 /// Arguments of `sndt cloud`.
 #[derive(clap::Args, Clone, Debug)]
+#[command(after_help = "Example:
+  sndt cloud data/synth --frame synth_00_living/cam_00/0000 --out out/frame.ply")]
 pub struct CloudArgs {
-    /// Dataset directory (prepared layout or raw Hypersim).
+    /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`) or
+    /// `synthetic[:SCENES:FRAMES]` (rendered on the fly).
     pub dataset: PathBuf,
     /// The frame, as `<scene>/<cam>/<NNNN>`.
     #[arg(long)]
@@ -37,11 +40,11 @@ pub fn run(a: &CloudArgs) -> Result<()> {
     Ok(())
 }
 
-/// Opens the dataset at `root` ([`open`]), loads frame `frame` (`scene/cam/NNNN`) and
+/// Opens the dataset `root` ([`open_spec`]: a directory, a bag or `synthetic[:S:F]`), loads frame `frame` (`scene/cam/NNNN`) and
 /// writes its coloured world points to `out` ([`write_frame_cloud`]), creating `out`'s
 /// directory.
 pub fn cloud(root: &Path, frame: &str, out: &Path, options: &OpenOptions) -> Result<CloudSummary> {
-    let data = open(root, options)?;
+    let data = open_spec(&root.to_string_lossy(), options)?;
     let id = FrameId::parse(frame)?;
     let frame = data
         .load(&id)

@@ -3,7 +3,7 @@
 
 use crate::cli::labels::LabelArg;
 use crate::dataset::frame::LabelSource;
-use crate::dataset::open::open;
+use crate::dataset::open::open_spec;
 use crate::dataset::source::{Dataset, OpenOptions};
 use crate::dataset::synthetic::{SynthOptions, Synthetic};
 use crate::eval::compare::{compare_cells, Agreement, CellReport, Options, Report};
@@ -13,29 +13,31 @@ use anyhow::{bail, Context, Result};
 use sndt_core::{Config, MissModel};
 use std::borrow::Cow;
 use std::fmt;
-use std::path::Path;
 
 /// Arguments of `sndt compare`.
 #[derive(clap::Args, Clone, Debug)]
+#[command(after_help = "Example:
+  sndt compare synthetic --cell 0.05,0.1 --frames 0..20")]
 pub struct CompareArgs {
-    /// Dataset directory (any layout `dataset::open` reads), or `synthetic` for the default
-    /// synthetic split rendered on the fly (no files).
+    /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`) or
+    /// `synthetic[:SCENES:FRAMES]` (rendered on the fly); `synthetic` alone is its first scene.
     pub dataset: String,
-    /// Cell sizes in metres, comma separated.
-    #[arg(long, value_delimiter = ',', default_value = "0.1")]
+    /// Voxel edges in metres, comma separated: the comparison is made at each.
+    #[arg(long, value_delimiter = ',', default_value = "0.1", value_parser = super::parse::positive)]
     pub cell: Vec<f32>,
-    /// Frames of the trajectory: `N` (the first N) or a range `A..B` (default: all).
-    #[arg(long)]
+    /// Which frames of the trajectory: `N` (the first N), `A..B` or `A..` (default: all).
+    #[arg(long, value_name = "N|A..B")]
     pub frames: Option<String>,
     /// Labels attached to the points.
     #[arg(long, value_enum, default_value_t = LabelArg::Gt)]
     pub labels: LabelArg,
-    /// Integrate every stride-th pixel in both directions (rendering uses all pixels).
+    /// Use every stride-th pixel in both directions when mapping (rendering uses all
+    /// pixels).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     pub stride: u32,
     /// Split of the prepared layout.
-    #[arg(long)]
-    pub split: Option<String>,
+    #[arg(long, default_value = "test")]
+    pub split: String,
     /// Trajectory `scene/cam` (default: the first).
     #[arg(long)]
     pub trajectory: Option<String>,
@@ -48,40 +50,6 @@ pub struct CompareArgs {
 pub fn run(args: &CompareArgs) -> Result<()> {
     println!("{}", ReportTable(&compare_report(args)?));
     Ok(())
-}
-
-/// Parses `--frames`: `N` = `0..N`, `A..B`, or `A..` (to the end), within `0..len`.
-///
-/// ```
-/// use sndt_host::cli::compare::frame_range;
-/// assert_eq!(frame_range(Some("20"), 100).unwrap(), 0..20);
-/// assert_eq!(frame_range(Some("10..30"), 100).unwrap(), 10..30);
-/// assert_eq!(frame_range(Some("90.."), 100).unwrap(), 90..100);
-/// assert_eq!(frame_range(None, 100).unwrap(), 0..100);
-/// assert!(frame_range(Some("30..10"), 100).is_err());
-/// assert!(frame_range(Some("200"), 100).is_err());
-/// ```
-pub fn frame_range(spec: Option<&str>, len: usize) -> Result<std::ops::Range<usize>> {
-    let parse = |s: &str| -> Result<usize> {
-        s.trim()
-            .parse()
-            .with_context(|| format!("--frames: {s:?} is not a frame number"))
-    };
-    let range = match spec {
-        None => 0..len,
-        Some(s) => match s.split_once("..") {
-            None => 0..parse(s)?,
-            Some((a, b)) if b.trim().is_empty() => parse(a)?..len,
-            Some((a, b)) => parse(a)?..parse(b)?,
-        },
-    };
-    if range.start >= range.end || range.end > len {
-        bail!(
-            "--frames {}: need a non-empty range within the trajectory's {len} frames",
-            spec.unwrap_or("")
-        );
-    }
-    Ok(range)
 }
 
 /// Opens the dataset, picks the trajectory and frames, and compares the core with the
@@ -102,7 +70,7 @@ pub fn compare_report(args: &CompareArgs) -> Result<Report> {
             args.trajectory.as_deref().unwrap_or("")
         )
     })?;
-    let range = frame_range(args.frames.as_deref(), ids.len())?;
+    let range = super::parse::frame_range(args.frames.as_deref(), ids.len())?;
     let ids = &ids[range.clone()];
     let configs = configs(&args.cell, args.constant_miss)?;
     let source = format!(
@@ -121,7 +89,7 @@ pub fn compare_report(args: &CompareArgs) -> Result<Report> {
 }
 
 /// `synthetic` is one default synthetic scene rendered on the fly (with predictions only
-/// when the labels need them); anything else is a directory for [`open`].
+/// when the labels need them); anything else is opened by [`open_spec`].
 fn open_dataset(args: &CompareArgs, labels: LabelSource) -> Result<Box<dyn Dataset>> {
     if args.dataset == "synthetic" {
         let predictions = matches!(labels, LabelSource::Pred | LabelSource::PredTopk);
@@ -132,10 +100,10 @@ fn open_dataset(args: &CompareArgs, labels: LabelSource) -> Result<Box<dyn Datas
         })?));
     }
     let options = OpenOptions {
-        split: args.split.clone(),
+        split: Some(args.split.clone()),
         ..Default::default()
     };
-    open(Path::new(&args.dataset), &options)
+    open_spec(&args.dataset, &options)
 }
 
 /// One valid core configuration per cell size.

@@ -17,6 +17,8 @@ use std::time::Instant;
 
 /// Arguments of `sndt demo`.
 #[derive(clap::Args, Clone, Debug, PartialEq)]
+#[command(after_help = "Example:
+  sndt demo --cell 0.05 --scenes 1 --frames-per-scene 10 --out out/demo")]
 pub struct DemoArgs {
     /// Output directory for pictures, back-projections and metrics.
     #[arg(long, default_value = "out/demo")]
@@ -27,9 +29,13 @@ pub struct DemoArgs {
     /// Synthetic scenes (kinds cycle: living, bedroom, kitchen, office, bathroom, open plan).
     #[arg(long, default_value_t = 2)]
     pub scenes: usize,
-    /// Frames per trajectory.
-    #[arg(long, default_value_t = 20)]
-    pub frames: usize,
+    /// About this many frames mapped per scene: every k-th frame of its camera walk of 100
+    /// frames (of this many, when more).
+    #[arg(long, value_name = "N", default_value_t = 20)]
+    pub frames_per_scene: usize,
+    /// Deprecated spelling of --frames-per-scene.
+    #[arg(long, hide = true, conflicts_with = "frames_per_scene")]
+    pub frames: Option<usize>,
     /// Use constant misses instead of NDT-OM misses.
     #[arg(long)]
     pub constant_miss: bool,
@@ -42,7 +48,8 @@ impl Default for DemoArgs {
             out: PathBuf::from("out/demo"),
             cell: 0.10,
             scenes: 2,
-            frames: 20,
+            frames_per_scene: 20,
+            frames: None,
             constant_miss: false,
         }
     }
@@ -57,6 +64,16 @@ struct Runs {
 /// Runs the demo and prints its report.
 pub fn run(a: &DemoArgs) -> Result<()> {
     let start = Instant::now();
+    let a = &DemoArgs {
+        frames_per_scene: super::parse::renamed(
+            a.frames_per_scene,
+            a.frames,
+            "--frames",
+            "--frames-per-scene",
+        ),
+        frames: None,
+        ..a.clone()
+    };
     let config = map_config(a);
     super::parse::check_cell_config(&config, a.cell)?;
     let split = walk_split(a)?;
@@ -90,8 +107,8 @@ pub fn run(a: &DemoArgs) -> Result<()> {
 /// Hypersim-like 100-frame walks, of which every k-th frame is used: the maps cover the
 /// whole walk at a fraction of the cost.
 fn walk_split(a: &DemoArgs) -> Result<Every> {
-    let walk = a.frames.max(100);
-    let step = (walk / a.frames.max(1)).max(1) as u32;
+    let walk = a.frames_per_scene.max(100);
+    let step = (walk / a.frames_per_scene.max(1)).max(1) as u32;
     let scenes = Synthetic::new(SynthOptions {
         scenes: a.scenes,
         frames: walk,

@@ -1,13 +1,14 @@
 //! `sndt export`: a map's Gaussians as a PLY (points or ellipsoids) for
 //! MeshLab/CloudCompare and / or as a ROS 2 bag (MCAP: point cloud and ellipsoid markers)
 //! for Foxglove and RViz, from a saved snapshot or from mapping a dataset's first
-//! trajectory (then, with `--every N`, the bag holds the map as it grows).
+//! trajectory (then, with `--mcap-interval N`, the bag holds the map as it grows).
 
 use crate::cli::labels::{check_labels, LabelArg};
+use crate::cli::open_args::{EveryArgs, OpenArgs};
 use crate::cli::parse::check_cell_config;
 use crate::dataset::open::open_spec;
 use crate::dataset::ros::msgs::Time;
-use crate::dataset::source::{usable_frames, OpenOptions};
+use crate::dataset::source::usable_frames;
 use crate::eval::evaluate::load_snapshot;
 use crate::output::export::{ellipsoids, write_ellipsoids, write_points};
 use crate::output::progress::progress;
@@ -20,9 +21,13 @@ use std::path::{Path, PathBuf};
 
 /// Arguments of `sndt export`.
 #[derive(clap::Args, Clone, Debug)]
+#[command(after_help = "Examples:
+  sndt export out/map/maps/synth_00_living_cam_00.sndt --ply out/map.ply --ellipsoids 1
+  sndt export synthetic:1:20 --cell 0.05 --mcap out/map.mcap --mcap-interval 5")]
 pub struct ExportArgs {
-    /// A map snapshot (`.sndt`, from `sndt map --save-maps`), or a dataset
-    /// (directory or `synthetic[:SCENES:FRAMES]`) whose first trajectory is mapped.
+    /// A map snapshot (`.sndt`, from `sndt map --save-maps`), or a dataset whose first
+    /// trajectory is mapped: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`) or
+    /// `synthetic[:SCENES:FRAMES]` (rendered on the fly).
     pub input: String,
     /// Output PLY file.
     #[arg(long, required_unless_present = "mcap")]
@@ -31,12 +36,10 @@ pub struct ExportArgs {
     /// (MarkerArray), /tf_static.
     #[arg(long)]
     pub mcap: Option<PathBuf>,
-    /// With a dataset and --mcap: write the map every N frames, not only at the end.
-    #[arg(long, value_parser = super::parse::at_least_one)]
-    pub every: Option<usize>,
-    /// With --mcap: the frame the map frame `sndt_map` is attached to.
-    #[arg(long, default_value = "world")]
-    pub world_frame: String,
+    /// With a dataset and --mcap: also write the map every N frames (of those --every
+    /// keeps), so the bag plays back as a growing map (default: only after the last frame).
+    #[arg(long, value_name = "N", value_parser = super::parse::at_least_one)]
+    pub mcap_interval: Option<usize>,
     /// Ellipsoid meshes at this many standard deviations instead of points at the means.
     #[arg(long, value_parser = super::parse::positive)]
     pub ellipsoids: Option<f32>,
@@ -49,6 +52,13 @@ pub struct ExportArgs {
     /// Only voxels with at least this many points.
     #[arg(long, default_value_t = 3)]
     pub min_points: u32,
+    /// How to open the dataset (when mapping one; `--world-frame` also names the frame a
+    /// map bag is attached to).
+    #[command(flatten)]
+    pub open: OpenArgs,
+    /// Which frames to map (when mapping a dataset).
+    #[command(flatten)]
+    pub every: EveryArgs,
 }
 
 /// Runs `sndt export`: loads or builds the map, writes its Gaussians and prints what it
@@ -59,17 +69,14 @@ pub fn run(a: &ExportArgs) -> Result<()> {
     if path.extension().is_some_and(|e| e == "sndt") && !path.is_file() {
         anyhow::bail!("{}: no such map snapshot file", path.display());
     }
-    if a.every == Some(0) {
-        anyhow::bail!("--every 0: give a number of frames of at least 1");
-    }
     let mut bag = match &a.mcap {
-        Some(p) => Some(MapBag::create(p, &a.world_frame, Time::default())?),
+        Some(p) => Some(MapBag::create(p, &a.open.world_frame, Time::default())?),
         None => None,
     };
     let map = if is_snapshot {
         load_snapshot(path)?
     } else {
-        map_first_trajectory(&a.input, a.cell, a.labels, a.every, bag.as_mut())?
+        map_first_trajectory(a, bag.as_mut())?
     };
     if let (Some(b), Some(p)) = (bag, &a.mcap) {
         let snapshots = b.written;
@@ -102,21 +109,16 @@ fn write_ply(ply: &Path, map: &HostMap, a: &ExportArgs) -> Result<()> {
     Ok(())
 }
 
-/// Maps the first trajectory of the dataset `spec` at `cell` with `labels`, skipping bad
-/// frames with a warning ([`usable_frames`]); with a bag, writes the map into it every
-/// `every` frames (if given) and after the last frame mapped, stamped with the frame's
-/// recording time (or 10 Hz from 1 s when the dataset has none). Fails when no frame
-/// could be mapped.
-fn map_first_trajectory(
-    spec: &str,
-    cell: f32,
-    labels: LabelArg,
-    every: Option<usize>,
-    mut bag: Option<&mut MapBag>,
-) -> Result<Box<HostMap>> {
+/// Maps the first trajectory of the dataset `a.input` (opened with `a.open`, every
+/// `a.every`-th frame) at `a.cell` with `a.labels`, skipping bad frames with a warning
+/// ([`usable_frames`]); with a bag, writes the map into it every `a.mcap_interval` frames
+/// (if given) and after the last frame mapped, stamped with the frame's recording time (or
+/// 10 Hz from 1 s when the dataset has none). Fails when no frame could be mapped.
+fn map_first_trajectory(a: &ExportArgs, mut bag: Option<&mut MapBag>) -> Result<Box<HostMap>> {
+    let (spec, cell, labels) = (a.input.as_str(), a.cell, a.labels);
     let config = Config::with_cell_size(cell);
     check_cell_config(&config, cell)?;
-    let dataset = open_spec(spec, &OpenOptions::default())?;
+    let dataset = a.every.apply(open_spec(spec, &a.open.options()?)?);
     check_labels(labels, dataset.as_ref(), spec)?;
     let trajectories = dataset.trajectories();
     let (name, ids) = trajectories
@@ -136,7 +138,7 @@ fn map_first_trajectory(
             .map_or(frame_time(k), Time::from_nanos);
         unwritten = Some(stamp);
         if let Some(b) = bag.as_deref_mut() {
-            if every.is_some_and(|n| (k + 1) % n == 0) {
+            if a.mcap_interval.is_some_and(|n| (k + 1) % n == 0) {
                 b.write(map.as_ref(), stamp)?;
                 unwritten = None;
             }

@@ -9,6 +9,8 @@ use std::path::PathBuf;
 
 /// Arguments of `sndt info`.
 #[derive(clap::Args, Clone, Debug)]
+#[command(after_help = "Example:
+  sndt info robot.mcap --world-frame odom")]
 pub struct InfoArgs {
     /// The bag (`.mcap`, ROS 2 messages in CDR).
     pub bag: PathBuf,

@@ -2,7 +2,7 @@
 //! paper's evaluation protocol (docs/ARCHITECTURE.md).
 
 use crate::cli::labels::{check_labels, LabelArg};
-use crate::cli::open_args::OpenArgs;
+use crate::cli::open_args::{EveryArgs, OpenArgs};
 use crate::cli::parse::check_config;
 use crate::dataset::frame::LabelSource;
 use crate::dataset::open::open_spec;
@@ -14,8 +14,12 @@ use std::path::{Path, PathBuf};
 
 /// Arguments of `sndt map`.
 #[derive(clap::Args, Clone, Debug)]
+#[command(after_help = "Examples:
+  sndt map synthetic:2:20 --cell 0.05 --save-maps --out out/map
+  sndt map robot.mcap --every 2 --world-frame odom --mcap out/robot/map.mcap --mcap-interval 10")]
 pub struct MapArgs {
-    /// Dataset directory (prepared layout or raw Hypersim), or `synthetic[:SCENES:FRAMES]`.
+    /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`) or
+    /// `synthetic[:SCENES:FRAMES]` (rendered on the fly).
     pub dataset: String,
     /// Voxel edge in metres.
     #[arg(long, default_value_t = 0.10, value_parser = super::parse::positive)]
@@ -30,7 +34,10 @@ pub struct MapArgs {
     /// How to open the dataset.
     #[command(flatten)]
     pub open: OpenArgs,
-    /// Use every stride-th pixel when mapping.
+    /// Which frames to map.
+    #[command(flatten)]
+    pub every: EveryArgs,
+    /// Use every stride-th pixel in both directions when mapping (1 = all, as the paper).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     pub stride: u32,
     /// About how many votes a voxel takes from one frame (1..=64; `Config::votes_per_frame`).
@@ -43,10 +50,10 @@ pub struct MapArgs {
     /// /tf_static): this file for one trajectory, `<stem>_<scene>_<cam>.mcap` for several.
     #[arg(long)]
     pub mcap: Option<PathBuf>,
-    /// With --mcap: write the map every N frames as well, so the bag plays back as a
-    /// growing map.
-    #[arg(long, value_parser = super::parse::at_least_one)]
-    pub every: Option<usize>,
+    /// With --mcap: also write the map every N frames (of those --every keeps), so the bag
+    /// plays back as a growing map (default: only after the last frame).
+    #[arg(long, value_name = "N", value_parser = super::parse::at_least_one)]
+    pub mcap_interval: Option<usize>,
 }
 
 /// Runs `sndt map`: maps and evaluates every trajectory, prints the per-trajectory lines
@@ -71,7 +78,7 @@ pub fn run(a: &MapArgs) -> Result<()> {
             (ConfigField::VotesPerFrame, &votes),
         ],
     )?;
-    let dataset = open_spec(&a.dataset, &a.open.options()?)?;
+    let dataset = a.every.apply(open_spec(&a.dataset, &a.open.options()?)?);
     check_labels(a.labels, dataset.as_ref(), &a.dataset)?;
     println!("sndt map: {}", dataset.describe());
     let frames = dataset.frames().len();
@@ -83,7 +90,7 @@ pub fn run(a: &MapArgs) -> Result<()> {
             stride: a.stride,
             save_maps: a.save_maps.then(|| a.out.join("maps")),
             mcap: a.mcap.clone(),
-            mcap_every: a.every,
+            mcap_interval: a.mcap_interval,
             mcap_world: a.open.world_frame.clone(),
             ..EvalOptions::new(config, labels)
         },

@@ -4,6 +4,11 @@
 //! command's own file: each file below holds one command's clap `Args` struct and its `run`
 //! function, which turns the options into calls of the job modules ([`crate::eval`],
 //! [`crate::output`], [`crate::embedded`], ...) and prints what they return.
+//!
+//! An option has one meaning in every command that has it (`--every K`: every k-th frame;
+//! `--frames`: which frames, `N` or `A..B`; `--cell`: voxel edges in metres; `--stride`:
+//! every stride-th pixel), and each command's `--help` ends with an example command line
+//! (clap's `after_help`, on its `Args` struct), which a test parses.
 
 pub mod budget;
 pub mod cloud;
@@ -75,5 +80,49 @@ pub fn main() -> Result<()> {
         Command::Export(a) => export::run(&a),
         Command::Compare(a) => compare::run(&a),
         Command::Experiment(a) => experiment::run(&a),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Cli;
+    use clap::{CommandFactory, Parser};
+
+    /// The example command lines of a help text: its lines `  sndt ...`.
+    fn examples(help: &str) -> Vec<&str> {
+        help.lines()
+            .filter_map(|l| l.strip_prefix("  "))
+            .filter(|l| l.starts_with("sndt "))
+            .collect()
+    }
+
+    /// Every command's `--help` ends with at least one example of that command, and every
+    /// example parses (so renaming an option without updating its examples fails here).
+    #[test]
+    fn every_command_ends_its_help_with_examples_that_parse() {
+        let mut problems = Vec::new();
+        for sub in Cli::command().get_subcommands() {
+            let name = sub.get_name();
+            let after = sub.get_after_help().map(ToString::to_string);
+            let lines = examples(after.as_deref().unwrap_or(""));
+            if lines.is_empty() {
+                problems.push(format!("sndt {name} --help ends without an example"));
+                continue;
+            }
+            let help = sub.clone().render_help().to_string();
+            if !help.trim_end().ends_with(lines[lines.len() - 1]) {
+                problems.push(format!("sndt {name} --help does not end with its example"));
+            }
+            for line in lines {
+                if !line.starts_with(&format!("sndt {name} ")) {
+                    problems.push(format!(
+                        "the example of sndt {name} is another command: {line}"
+                    ));
+                } else if let Err(e) = Cli::try_parse_from(line.split_whitespace()) {
+                    problems.push(format!("the example `{line}` does not parse: {e}"));
+                }
+            }
+        }
+        assert!(problems.is_empty(), "{}", problems.join("\n"));
     }
 }

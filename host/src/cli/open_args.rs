@@ -1,10 +1,12 @@
-//! The dataset-opening options `map` and `experiment` share (`--split`, `--paper-fy`,
-//! `--predictions`, and for ROS 2 bags the topics, world frame and sync tolerance).
+//! The dataset options commands share: how to open a dataset ([`OpenArgs`]: `--split`,
+//! `--paper-fy`, `--predictions`, and for ROS 2 bags the topics, world frame and sync
+//! tolerance) and which of its frames to map ([`EveryArgs`]: `--every`).
 
-use crate::dataset::source::OpenOptions;
+use crate::dataset::source::{Dataset, Every, OpenOptions};
 use std::path::PathBuf;
 
-/// How to open a dataset directory (shared by `map` and `experiment`).
+/// How to open a dataset directory (shared by `map`, `export`, `experiment`, `points` and
+/// `info`).
 #[derive(clap::Args, Clone, Debug)]
 pub struct OpenArgs {
     /// Split of the prepared layout.
@@ -16,7 +18,8 @@ pub struct OpenArgs {
     /// Directory of ESANet `.npy` predictions.
     #[arg(long)]
     pub predictions: Option<PathBuf>,
-    /// ROS 2 bag: frame the camera poses are in.
+    /// ROS 2 bag: frame the camera poses are in. A map written as a bag (`--mcap`) is
+    /// attached to this frame.
     #[arg(long, default_value = "world")]
     pub world_frame: String,
     /// ROS 2 bag: depth topic (default: the 16UC1 / 32FC1 image topic).
@@ -63,6 +66,33 @@ impl OpenArgs {
                 sync_tolerance_ns: (self.sync_tolerance.max(0.0) * 1e9) as u64,
             },
         })
+    }
+}
+
+/// Which frames of a dataset to map (`--every`, shared by `map` and `export`; `experiment`
+/// has the same option).
+#[derive(clap::Args, Clone, Debug)]
+pub struct EveryArgs {
+    /// Use every k-th frame of each trajectory (frames 0, k, 2k, ...; 1 = all, as the
+    /// paper).
+    #[arg(long, value_name = "K", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    pub every: u32,
+}
+
+impl EveryArgs {
+    /// `dataset`, or every k-th frame of it ([`Every`]) with `--every` above 1.
+    ///
+    /// ```
+    /// use sndt_host::cli::open_args::EveryArgs;
+    /// let d = sndt_host::dataset::open_spec("synthetic:1:6", &Default::default()).unwrap();
+    /// assert_eq!(EveryArgs { every: 2 }.apply(d).frames().len(), 3);
+    /// ```
+    pub fn apply(&self, dataset: Box<dyn Dataset>) -> Box<dyn Dataset> {
+        if self.every > 1 {
+            Box::new(Every::new(dataset, self.every))
+        } else {
+            dataset
+        }
     }
 }
 

@@ -49,6 +49,42 @@ pub fn at_least_one(s: &str) -> Result<usize, String> {
     }
 }
 
+/// Parses `--frames` (of `compare` and `points`): `N` = the first N (`0..N`), `A..B`, or
+/// `A..` (to the end), within `0..len`; `None` (option not given) is all frames.
+///
+/// ```
+/// use sndt_host::cli::parse::frame_range;
+/// assert_eq!(frame_range(Some("20"), 100).unwrap(), 0..20);
+/// assert_eq!(frame_range(Some("10..30"), 100).unwrap(), 10..30);
+/// assert_eq!(frame_range(Some("90.."), 100).unwrap(), 90..100);
+/// assert_eq!(frame_range(None, 100).unwrap(), 0..100);
+/// assert!(frame_range(Some("30..10"), 100).is_err());
+/// assert!(frame_range(Some("200"), 100).is_err());
+/// ```
+pub fn frame_range(spec: Option<&str>, len: usize) -> anyhow::Result<std::ops::Range<usize>> {
+    use anyhow::Context;
+    let parse = |s: &str| -> anyhow::Result<usize> {
+        s.trim()
+            .parse()
+            .with_context(|| format!("--frames: {s:?} is not a frame number"))
+    };
+    let range = match spec {
+        None => 0..len,
+        Some(s) => match s.split_once("..") {
+            None => 0..parse(s)?,
+            Some((a, b)) if b.trim().is_empty() => parse(a)?..len,
+            Some((a, b)) => parse(a)?..parse(b)?,
+        },
+    };
+    if range.start >= range.end || range.end > len {
+        anyhow::bail!(
+            "--frames {}: need a non-empty range within the {len} frames",
+            spec.unwrap_or("")
+        );
+    }
+    Ok(range)
+}
+
 /// Checks a config built from options, naming the option behind a refused field:
 /// `options` pairs each field an option sets with the option as typed (`--cell 0.001`).
 /// A field no option sets is named as the field.

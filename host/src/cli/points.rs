@@ -1,5 +1,6 @@
-//! `sndt points`: the sensor origin and world points of a dataset's first frames as a raw
-//! binary file, the input `scripts/bench-peers.sh` gives OctoMap.
+//! `sndt points`: the sensor origin and world points of a dataset's frames (all, or those
+//! `--frames` selects) as a raw binary file, the input `scripts/bench-peers.sh` gives
+//! OctoMap.
 //!
 //! The file (little-endian; [`crate::output::points`] has the details): magic
 //! `SNDTPTS1`, `u32` frame count, then per frame `3 x f32` sensor origin, `u32` point
@@ -15,16 +16,19 @@ use std::path::PathBuf;
 
 /// Arguments of `sndt points`.
 #[derive(clap::Args, Clone, Debug)]
+#[command(after_help = "Example:
+  sndt points data/synth --frames 0..12 --out out/points.bin")]
 pub struct PointsArgs {
-    /// Dataset directory (prepared layout or raw Hypersim), or `synthetic[:SCENES:FRAMES]`.
+    /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`) or
+    /// `synthetic[:SCENES:FRAMES]` (rendered on the fly).
     pub dataset: String,
     /// Output file (`SNDTPTS1` format).
     #[arg(long)]
     pub out: PathBuf,
-    /// Export only the first N frames in dataset order (trajectory, then index); default:
-    /// every frame.
-    #[arg(long)]
-    pub frames: Option<usize>,
+    /// Which frames, counted in dataset order (trajectory, then index): `N` (the first N),
+    /// `A..B` or `A..` (default: all), as `sndt compare --frames`.
+    #[arg(long, value_name = "N|A..B")]
+    pub frames: Option<String>,
     /// How to open the dataset.
     #[command(flatten)]
     pub open: OpenArgs,
@@ -34,7 +38,7 @@ pub struct PointsArgs {
 pub fn run(a: &PointsArgs) -> Result<()> {
     let data = open_spec(&a.dataset, &a.open.options()?)?;
     let all = data.frames();
-    let ids = &all[..a.frames.unwrap_or(all.len()).min(all.len())];
+    let ids = &all[super::parse::frame_range(a.frames.as_deref(), all.len())?];
     println!("{}", write_points(data.as_ref(), ids, &a.out)?);
     Ok(())
 }

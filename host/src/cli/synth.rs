@@ -1,6 +1,7 @@
 //! `sndt synth`: a synthetic labelled split written in the prepared layout (no download),
 //! with its class histogram, preview pictures and the raw prediction's score.
 
+use crate::cli::parse::renamed;
 use crate::dataset::classes::{render_color, NYU40};
 use crate::dataset::source::Dataset;
 use crate::dataset::synthetic::{write_split, DepthNoise, SynthOptions, Synthetic};
@@ -14,6 +15,8 @@ use std::time::Instant;
 
 /// Arguments of `sndt synth`.
 #[derive(clap::Args, Clone, Debug)]
+#[command(after_help = "Example:
+  sndt synth --out data/synth --scenes 2 --frames-per-scene 20 --no-predictions")]
 pub struct SynthArgs {
     /// Output directory (the dataset root) of the prepared layout.
     #[arg(long, required_unless_present = "mcap")]
@@ -29,9 +32,12 @@ pub struct SynthArgs {
     /// Seed of everything.
     #[arg(long, default_value_t = crate::dataset::synthetic::DEFAULT_SEED)]
     pub seed: u64,
-    /// Frames per trajectory.
-    #[arg(long, default_value_t = 100)]
-    pub frames: usize,
+    /// Frames of each scene's camera trajectory (one trajectory per scene).
+    #[arg(long, value_name = "N", default_value_t = 100)]
+    pub frames_per_scene: usize,
+    /// Deprecated spelling of --frames-per-scene.
+    #[arg(long, hide = true, conflicts_with = "frames_per_scene")]
+    pub frames: Option<usize>,
     /// Add range-dependent depth noise (Kinect v1 model).
     #[arg(long)]
     pub noise: bool,
@@ -44,9 +50,15 @@ pub struct SynthArgs {
 /// previews and scores the raw predictions.
 pub fn run(a: &SynthArgs) -> Result<()> {
     let t = Instant::now();
+    let per_scene = renamed(
+        a.frames_per_scene,
+        a.frames,
+        "--frames",
+        "--frames-per-scene",
+    );
     let options = SynthOptions {
         scenes: a.scenes,
-        frames: a.frames,
+        frames: per_scene,
         seed: a.seed,
         noise: a.noise.then_some(DepthNoise::KINECT),
         predictions: !a.no_predictions,
@@ -60,7 +72,7 @@ pub fn run(a: &SynthArgs) -> Result<()> {
         return Ok(());
     };
     println!("sndt synth: {} -> {}", split.describe(), out.display());
-    let bar = progress((a.scenes * a.frames) as u64, "synth");
+    let bar = progress((a.scenes * per_scene) as u64, "synth");
     // Per-frame statistics are summed outside the lock; only the merge is serialised.
     let stats = Mutex::new(LabelStats::default());
     let frames = write_split(out, &split, &|f| {

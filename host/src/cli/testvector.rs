@@ -9,6 +9,9 @@ use std::path::{Path, PathBuf};
 
 /// Arguments of `sndt testvector`.
 #[derive(clap::Args, Clone, Debug)]
+#[command(after_help = "Examples:
+  sndt testvector --out targets/cortex-m4f/vector
+  sndt testvector --check targets/cortex-m4f/vector/frames.bin")]
 pub struct TestvectorArgs {
     /// Directory to write frames.bin and expected_crc.txt into.
     #[arg(long)]

@@ -108,6 +108,10 @@ impl Dataset for Every {
     fn pose_file(&self, id: &FrameId) -> Option<PathBuf> {
         self.inner.pose_file(id)
     }
+
+    fn stamp(&self, id: &FrameId) -> Option<u64> {
+        self.inner.stamp(id)
+    }
 }
 
 /// A frame whose own input is bad: one of its files is missing, unreadable or corrupt, or

@@ -197,7 +197,7 @@ pub fn simulate_dataset(
         .collect()
 }
 
-/// One table row per trajectory (markdown), for `sndt budget --dataset`: the budgets at the
+/// One table row per trajectory (markdown), for `sndt budget DATASET`: the budgets at the
 /// simulated `capacity`, and whether the peaks fit the `requested` (voxels, blocks).
 pub fn table(
     rows: &[(String, TrajectoryBudget)],

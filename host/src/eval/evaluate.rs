@@ -48,8 +48,9 @@ pub struct EvalOptions {
     /// ROS 2 bag of each trajectory's map ([`crate::output::ros::export`]): this file for one
     /// trajectory, `<stem>_<scene>_<cam>.mcap` beside it for several.
     pub mcap: Option<PathBuf>,
-    /// With `mcap`: write the map every this many frames as well as at the end.
-    pub mcap_every: Option<usize>,
+    /// With `mcap`: write the map after every this many frames of the trajectory as well
+    /// as at the end (`sndt map --mcap-interval`).
+    pub mcap_interval: Option<usize>,
     /// With `mcap`: the frame `/tf_static` attaches the map frame to.
     pub mcap_world: String,
 }
@@ -66,7 +67,7 @@ impl EvalOptions {
             keep_maps: false,
             save_maps: None,
             mcap: None,
-            mcap_every: None,
+            mcap_interval: None,
             mcap_world: "world".into(),
         }
     }
@@ -339,7 +340,7 @@ fn evaluate_trajectory(
         |frame, map| {
             score_input(&mut input, frame, options.labels);
             if let Some(b) = bag.as_mut() {
-                unwritten = write_growing(b, dataset, ids, frame, map, options.mcap_every)?;
+                unwritten = write_growing(b, dataset, ids, frame, map, options.mcap_interval)?;
             }
             progress();
             Ok(())

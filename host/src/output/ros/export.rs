@@ -2,8 +2,8 @@
 //! the occupied Gaussians' means as a `sensor_msgs/msg/PointCloud2` (x, y, z, rgb in the
 //! NYU40 palette, class, confidence, occupancy) and as ellipsoid markers
 //! (`visualization_msgs/msg/MarkerArray`), in the frame `sndt_map`, which `/tf_static`
-//! puts at the identity of the world frame. Written once, or every N frames so that the
-//! recording plays back as a growing map.
+//! puts at the identity of the world frame. Written once, or every N frames
+//! (`--mcap-interval N`) so that the recording plays back as a growing map.
 
 use super::write::BagWriter;
 use crate::dataset::classes::color;
