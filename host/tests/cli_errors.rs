@@ -331,12 +331,9 @@ fn a_snapshot_with_an_absurd_max_range_is_refused() {
     let map = sndt_host::semantic_map::boxed_map::<64, 16, 40>(sndt_core::Config::DEFAULT).unwrap();
     let mut bytes = vec![0; map.snapshot_len()];
     map.write_snapshot(&mut bytes).unwrap();
-    bytes[52..56].copy_from_slice(&1e4f32.to_le_bytes());
-    let n = bytes.len() - 4;
-    let mut crc = sndt_core::Crc32::new();
-    crc.update(&bytes[..n]);
-    let crc = crc.finish().to_le_bytes();
-    bytes[n..].copy_from_slice(&crc);
+    let mut header = sndt_core::SnapshotHeader::read(&bytes).unwrap();
+    header.config.max_range = 1e4;
+    header.rewrite(&mut bytes).unwrap();
     let file = dir.join("far.sndt");
     std::fs::write(&file, &bytes).unwrap();
     let ply = dir.join("far.ply");

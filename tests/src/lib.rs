@@ -42,9 +42,8 @@ pub fn content<const V: usize, const B: usize, const C: usize>(map: &Map<V, B, C
     let mut header = SnapshotHeader::read(&s).expect("the map's own snapshot header");
     header.frames = 0;
     header
-        .write(&mut s)
+        .rewrite(&mut s)
         .expect("a whole snapshot holds its header");
-    s.truncate(s.len() - 4); // the CRC, which covers the frame counter
     s
 }
 
@@ -55,12 +54,8 @@ pub fn edit_header(snap: &[u8], edit: impl FnOnce(&mut SnapshotHeader)) -> Vec<u
     let mut header = SnapshotHeader::read(&bytes).expect("a snapshot header to edit");
     edit(&mut header);
     header
-        .write(&mut bytes)
+        .rewrite(&mut bytes)
         .expect("a whole snapshot holds its header");
-    let body = bytes.len() - 4;
-    let mut crc = sndt_core::Crc32::new();
-    crc.update(&bytes[..body]);
-    bytes[body..].copy_from_slice(&crc.finish().to_le_bytes());
     bytes
 }
 

@@ -468,6 +468,38 @@ impl SnapshotHeader {
         Ok(SNAPSHOT_HEADER_BYTES)
     }
 
+    /// Writes the header into a whole snapshot and seals it again with a fresh CRC, so
+    /// that a tool can change what a stored map says about itself (its config, its frame
+    /// count) without knowing the layout. `snapshot` must be exactly one snapshot; too short
+    /// a slice gives [`Error::SnapshotTruncated`] and nothing is written. Whether the
+    /// result loads is for [`Map::read_snapshot`] to say: a config it refuses is refused
+    /// there.
+    ///
+    /// ```
+    /// use sndt_core::*;
+    /// let map: Map<64, 16, 4> = Map::new(Config::DEFAULT);
+    /// let mut buf = [0u8; 256];
+    /// let n = map.write_snapshot(&mut buf).unwrap();
+    /// let mut h = SnapshotHeader::read(&buf[..n]).unwrap();
+    /// h.frames = 7;
+    /// h.rewrite(&mut buf[..n]).unwrap();
+    /// let mut copy: Map<64, 16, 4> = Map::new(Config::DEFAULT);
+    /// copy.read_snapshot(&buf[..n]).unwrap();
+    /// assert_eq!(copy.stats().frames, 7);
+    /// assert_eq!(h.rewrite(&mut [0u8; 20]), Err(Error::SnapshotTruncated));
+    /// ```
+    pub fn rewrite(&self, snapshot: &mut [u8]) -> Result<(), Error> {
+        if snapshot.len() < SNAPSHOT_HEADER_BYTES + 4 {
+            return Err(Error::SnapshotTruncated);
+        }
+        self.write(snapshot)?;
+        let (body, crc) = snapshot
+            .split_last_chunk_mut::<4>()
+            .ok_or(Error::SnapshotTruncated)?;
+        *crc = crc32(body).to_le_bytes();
+        Ok(())
+    }
+
     /// The header's bytes, in the layout of the module doc.
     fn encode(&self, hdr: &mut [u8; SNAPSHOT_HEADER_BYTES]) {
         let mut w = Writer { buf: hdr, pos: 0 };
