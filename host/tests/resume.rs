@@ -21,7 +21,7 @@ const EXPERIMENT: [&str; 6] = [
     "0.4",
 ];
 
-/// The hook's exit code (`sndt_host::eval::run_store::STOP_EXIT_CODE`).
+/// The hook's exit code (`sndt_host::eval::experiment::store::STOP_EXIT_CODE`).
 const STOPPED: i32 = 86;
 
 /// Runs the small experiment into `out` with `extra` arguments and environment.
