@@ -8,6 +8,7 @@
 //! ([`crate::eval::experiment`]).
 
 use crate::cli::open_args::OpenArgs;
+use crate::cli::parse::renamed;
 use crate::dataset::frame::LabelSource;
 use crate::dataset::open::open_spec;
 use crate::dataset::source::{Dataset, Every};
@@ -63,15 +64,22 @@ impl From<MethodArg> for Method {
 
 /// Arguments of `sndt experiment`.
 #[derive(clap::Args, Clone, Debug)]
+#[command(
+    after_help = "Example:\n  sndt experiment synthetic --every 2 --cell 0.05,0.1 --out out/experiment"
+)]
 pub struct ExperimentArgs {
     /// Dataset directory (prepared layout or raw Hypersim), or `synthetic[:SCENES:FRAMES]`.
     pub dataset: String,
     /// Labels fed to the maps.
     #[arg(long, value_enum, default_value = "both")]
     pub labels: ExperimentLabels,
-    /// Cell sizes, metres.
+    /// Cell sizes, metres (comma-separated).
     #[arg(long, value_delimiter = ',', default_value = "0.05,0.1,0.15,0.2", value_parser = super::parse::positive)]
-    pub cells: Vec<f32>,
+    pub cell: Vec<f32>,
+    /// `--cell`'s old spelling, hidden: taken with a deprecation warning, so that scripts
+    /// written before the rename still run (one spelling of cell sizes across commands).
+    #[arg(long, hide = true, conflicts_with = "cell", value_delimiter = ',', value_parser = super::parse::positive)]
+    pub cells: Option<Vec<f32>>,
     /// Kernel lengths of S-BKI and OS-BKI, metres.
     #[arg(long, value_delimiter = ',', default_value = "0.1,0.2,0.3,0.4", value_parser = super::parse::positive)]
     pub kernels: Vec<f32>,
@@ -110,11 +118,12 @@ pub struct ExperimentArgs {
 }
 
 impl ExperimentArgs {
-    /// The experiment's grid these arguments ask for.
+    /// The experiment's grid these arguments ask for; `--cells` (the old spelling of
+    /// `--cell`) is taken with a warning on stderr.
     pub fn options(&self) -> ExperimentOptions {
         ExperimentOptions {
             labels: self.labels.sources(),
-            cells: self.cells.clone(),
+            cells: renamed(self.cell.clone(), self.cells.clone(), "--cells", "--cell"),
             kernels: self.kernels.clone(),
             methods: self.methods.iter().map(|&m| m.into()).collect(),
             free_resolution: self.free_resolution,
