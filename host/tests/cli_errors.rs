@@ -538,7 +538,7 @@ fn testvector_check_needs_its_crc_files_and_names_the_file() {
     assert!(err.contains(&format!("{}: ", vector.display())), "{err}");
 }
 
-/// `sndt experiment DIR --out OUT --cells 0.2 --kernels 0.4 extra...` on a prepared layout
+/// `sndt experiment DIR --out OUT --cell 0.2 --kernels 0.4 extra...` on a prepared layout
 /// (one small configuration per method).
 fn experiment(root: &Path, extra: &[&str]) -> (i32, String, String) {
     let out = root.with_file_name("experiment");
@@ -547,7 +547,7 @@ fn experiment(root: &Path, extra: &[&str]) -> (i32, String, String) {
         root.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
-        "--cells",
+        "--cell",
         "0.2",
         "--kernels",
         "0.4",

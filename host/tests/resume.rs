@@ -15,13 +15,13 @@ use std::time::SystemTime;
 const EXPERIMENT: [&str; 6] = [
     "experiment",
     "synthetic:2:3",
-    "--cells",
+    "--cell",
     "0.2",
     "--kernels",
     "0.4",
 ];
 
-/// The hook's exit code (`sndt_host::eval::run_store::STOP_EXIT_CODE`).
+/// The hook's exit code (`sndt_host::eval::experiment::store::STOP_EXIT_CODE`).
 const STOPPED: i32 = 86;
 
 /// Runs the small experiment into `out` with `extra` arguments and environment.
@@ -232,9 +232,10 @@ fn an_interrupted_experiment_resumes_to_the_same_tables() {
 /// manifest and the option that differs.
 fn assert_refused(out: &Path) {
     for (extra, differs) in [
-        // clap appends a repeated `--cells` to the first.
+        // clap appends a repeated `--cell` to the first. The manifest keeps the option's
+        // old name, `--cells`, so that stores written before the rename still resume.
         (
-            &["--resume", "--cells", "0.25"][..],
+            &["--resume", "--cell", "0.25"][..],
             "--cells: stored 0.2, now 0.2,0.25",
         ),
         (

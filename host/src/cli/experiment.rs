@@ -1,20 +1,23 @@
 //! `sndt experiment`: the paper's comparison of S-NDT, S-BKI and OS-BKI per cell size and
 //! kernel length (Tables I and II, per-class IoU, rate-vs-mIoU charts); `--resume`
 //! continues an interrupted one from the runs it kept on disk.
+//!
+//! This file parses the options, opens the dataset, hands both to
+//! [`run_experiment`] once and prints what it returns: planning, running, the
+//! stored runs and the reports are all the experiment's own
+//! ([`crate::eval::experiment`]).
 
 use crate::cli::open_args::OpenArgs;
+use crate::cli::parse::renamed;
 use crate::dataset::frame::LabelSource;
 use crate::dataset::open::open_spec;
 use crate::dataset::source::{Dataset, Every};
-use crate::eval::experiment::{manifest, progress_steps, run_resumable, Experiment};
-use crate::eval::experiment::{ExperimentOptions, Method};
-use crate::eval::run_store::{Manifest, RunStore};
-use crate::output::progress::progress;
+use crate::eval::experiment::store::Manifest;
+use crate::eval::experiment::{run_experiment, Experiment, ExperimentOptions, ExperimentRequest};
+use crate::eval::experiment::{Finished, Method};
 use anyhow::{bail, Result};
 use sndt_core::Config;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicU64, Ordering};
-use std::time::Instant;
 
 /// Which labels an experiment maps with: ground truth, predicted top-1, or both (ground
 /// truth first).
@@ -61,15 +64,22 @@ impl From<MethodArg> for Method {
 
 /// Arguments of `sndt experiment`.
 #[derive(clap::Args, Clone, Debug)]
+#[command(
+    after_help = "Example:\n  sndt experiment synthetic --every 2 --cell 0.05,0.1 --out out/experiment"
+)]
 pub struct ExperimentArgs {
     /// Dataset directory (prepared layout or raw Hypersim), or `synthetic[:SCENES:FRAMES]`.
     pub dataset: String,
     /// Labels fed to the maps.
     #[arg(long, value_enum, default_value = "both")]
     pub labels: ExperimentLabels,
-    /// Cell sizes, metres.
+    /// Cell sizes, metres (comma-separated).
     #[arg(long, value_delimiter = ',', default_value = "0.05,0.1,0.15,0.2", value_parser = super::parse::positive)]
-    pub cells: Vec<f32>,
+    pub cell: Vec<f32>,
+    /// `--cell`'s old spelling, hidden: taken with a deprecation warning, so that scripts
+    /// written before the rename still run (one spelling of cell sizes across commands).
+    #[arg(long, hide = true, conflicts_with = "cell", value_delimiter = ',', value_parser = super::parse::positive)]
+    pub cells: Option<Vec<f32>>,
     /// Kernel lengths of S-BKI and OS-BKI, metres.
     #[arg(long, value_delimiter = ',', default_value = "0.1,0.2,0.3,0.4", value_parser = super::parse::positive)]
     pub kernels: Vec<f32>,
@@ -108,11 +118,12 @@ pub struct ExperimentArgs {
 }
 
 impl ExperimentArgs {
-    /// The experiment these arguments ask for.
+    /// The experiment's grid these arguments ask for; `--cells` (the old spelling of
+    /// `--cell`) is taken with a warning on stderr.
     pub fn options(&self) -> ExperimentOptions {
         ExperimentOptions {
             labels: self.labels.sources(),
-            cells: self.cells.clone(),
+            cells: renamed(self.cell.clone(), self.cells.clone(), "--cells", "--cell"),
             kernels: self.kernels.clone(),
             methods: self.methods.iter().map(|&m| m.into()).collect(),
             free_resolution: self.free_resolution,
@@ -120,94 +131,81 @@ impl ExperimentArgs {
         }
     }
 
-    /// Everything the stored runs depend on: the experiment's own options, the dataset as
-    /// given, `--every`, how it was opened, and this sndt's version.
-    fn manifest(&self, opts: &ExperimentOptions, dataset: &dyn Dataset) -> Manifest {
-        let mut m = manifest(opts, dataset);
-        m.insert("dataset".into(), self.dataset.clone());
-        m.insert("--every".into(), self.every.max(1).to_string());
-        m.insert("dataset options".into(), format!("{:?}", self.open));
-        m.insert("sndt version".into(), env!("CARGO_PKG_VERSION").into());
-        m
+    /// Everything [`run_experiment`] needs besides the dataset: the grid, the output, and
+    /// what the stored runs depend on that the opened dataset does not tell (the dataset
+    /// as given, `--every`, how it was opened).
+    pub fn request(&self) -> ExperimentRequest {
+        let provenance: Manifest = [
+            ("dataset", self.dataset.clone()),
+            ("--every", self.every.max(1).to_string()),
+            ("dataset options", format!("{:?}", self.open)),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect();
+        ExperimentRequest {
+            options: self.options(),
+            provenance,
+            out: self.out.clone(),
+            resume: self.resume,
+        }
+    }
+
+    /// Opens the dataset (every k-th frame with `--every`) and says which it is; predicted
+    /// labels asked of a dataset without predictions are refused, since maps without
+    /// labels would score 0 % and look like a result.
+    fn open_dataset(&self) -> Result<Box<dyn Dataset>> {
+        let mut dataset = open_spec(&self.dataset, &self.open.options()?)?;
+        if self.every > 1 {
+            dataset = Box::new(Every::new(dataset, self.every));
+        }
+        println!("sndt experiment: {}", dataset.describe());
+        if self.labels != ExperimentLabels::Gt {
+            if let Some(place) = dataset.missing_predictions() {
+                let option = format!("{:?}", self.labels).to_lowercase();
+                bail!(
+                    "--labels {option}: {} has no predictions: {place}",
+                    self.dataset
+                );
+            }
+        }
+        Ok(dataset)
     }
 }
 
 /// Runs `sndt experiment`: runs every method, label source, cell size and kernel length
-/// (taking finished runs from `<out>/runs/` with `--resume`), prints the tables and writes
-/// them with the charts into `--out`.
+/// (taking finished runs from `<out>/runs/` with `--resume`), writes the tables and charts
+/// into `--out` and prints them.
 pub fn run(a: &ExperimentArgs) -> Result<()> {
-    let mut dataset = open_spec(&a.dataset, &a.open.options()?)?;
-    if a.every > 1 {
-        dataset = Box::new(Every::new(dataset, a.every));
-    }
-    println!("sndt experiment: {}", dataset.describe());
-    if a.labels != ExperimentLabels::Gt {
-        // Maps without labels would score 0 % and look like a result.
-        if let Some(place) = dataset.missing_predictions() {
-            let option = format!("{:?}", a.labels).to_lowercase();
-            bail!(
-                "--labels {option}: {} has no predictions: {place}",
-                a.dataset
-            );
-        }
-    }
-    let opts = a.options();
-    let store = RunStore::open(
-        &a.out.join("runs"),
-        &a.manifest(&opts, dataset.as_ref()),
-        a.resume,
-    )?;
-    let t = Instant::now();
-    let exp = run_with_progress(dataset.as_ref(), &opts, &store, t)?;
+    let request = a.request();
+    let dataset = a.open_dataset()?;
+    let finished = run_experiment(dataset.as_ref(), &request)?;
+    print_finished(&finished);
+    Ok(())
+}
+
+/// Prints what the experiment did, its tables and the files it wrote.
+fn print_finished(f: &Finished) {
+    let exp = &f.experiment;
     let skipped = match exp.skipped {
         0 => String::new(),
         k => format!(", {k} skipped (bad input, named in the warnings)"),
     };
     println!(
         "{} trajectories, {} frames mapped{skipped}, {:.0} s",
-        dataset.trajectories().len(),
-        exp.frames,
-        t.elapsed().as_secs_f64()
+        f.trajectories, exp.frames, f.seconds
     );
     println!(
         "resumed {} of {} runs, computed {} (a run: one map on one trajectory; kept in {})\n",
-        store.resumed(),
-        store.resumed() + store.computed(),
-        store.computed(),
-        store.dir().display()
+        f.resumed,
+        f.resumed + f.computed,
+        f.computed,
+        f.runs_dir.display()
     );
-    print_tables(&exp);
-    for p in exp.write(&a.out)? {
+    print_tables(exp);
+    for p in &f.written {
         println!("wrote {}", p.display());
     }
-    Ok(())
-}
-
-/// Runs the experiment behind a progress bar; long runs in logs (no terminal, bar hidden)
-/// get a line every 5 % instead, timed from `t`.
-fn run_with_progress(
-    dataset: &dyn Dataset,
-    opts: &ExperimentOptions,
-    store: &RunStore,
-    t: Instant,
-) -> Result<Experiment> {
-    let steps = progress_steps(opts, dataset.frames().len());
-    let bar = progress(steps, "experiment");
-    let done = AtomicU64::new(0);
-    let tick = || {
-        bar.inc(1);
-        let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-        if bar.is_hidden() && n * 20 / steps != (n - 1) * 20 / steps {
-            eprintln!(
-                "experiment: {} % after {:.0} s",
-                n * 100 / steps,
-                t.elapsed().as_secs_f64()
-            );
-        }
-    };
-    let exp = run_resumable(dataset, opts, store, &tick)?;
-    bar.finish_and_clear();
-    Ok(exp)
 }
 
 /// Prints the input labels' own scores, Tables I and II and the holes table.

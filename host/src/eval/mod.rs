@@ -4,8 +4,8 @@
 //! - [`metrics`]: the 42x42 confusion matrix and mIoU / mPAcc / invR, as the authors'
 //!   evaluator computes them;
 //! - [`evaluate`]: one map per trajectory, back-projected into every frame;
-//! - [`experiment`]: S-NDT, S-BKI and OS-BKI per cell size and kernel (Tables I and II);
-//! - [`run_store`]: the experiment's finished runs kept on disk, to resume it;
+//! - [`experiment`]: S-NDT, S-BKI and OS-BKI per cell size and kernel (Tables I and II),
+//!   with its finished runs kept on disk to resume it ([`experiment::store`]);
 //! - [`compare`]: the core against the f64 reference, with stated tolerances.
 
 pub mod compare;
@@ -13,4 +13,3 @@ pub mod evaluate;
 pub mod experiment;
 pub mod label_stats;
 pub mod metrics;
-pub mod run_store;

@@ -5,8 +5,12 @@
 //! ([`crate::atomic`]) as soon as its run is finished: a crash or a kill leaves
 //! every file either whole or absent. Beside them, `manifest.json` records the options the
 //! runs were made with; a store is only resumed under the same options. What a file holds
-//! is the caller's business ([`RunStore::save_result`] takes any serialisable value): this
-//! module knows names, the manifest, the counts and the test hook only.
+//! is the business of `records.rs` beside this file, which knows the experiment's runs
+//! ([`RunStore::save_result`] takes any serialisable value): this module knows names, the
+//! manifest, the counts and the test hook only, so that the directory's guarantees (whole
+//! files, same options, the stop hook) are checked in one place.
+
+pub(super) mod records;
 
 use crate::atomic::write_bytes;
 use anyhow::{bail, Context, Result};
@@ -235,7 +239,7 @@ fn stop_after() -> Option<usize> {
 /// every other byte written `%XX`, so that different names stay different.
 ///
 /// ```
-/// use sndt_host::eval::run_store::file_name_part;
+/// use sndt_host::eval::experiment::store::file_name_part;
 /// assert_eq!(file_name_part("synth_00/cam_00"), "synth_00%2Fcam_00");
 /// assert_ne!(file_name_part("a/b"), file_name_part("a%2Fb"));
 /// ```
