@@ -8,9 +8,9 @@
 
 use libfuzzer_sys::fuzz_target;
 use sndt_fuzz::map_frame;
+use sndt_host::dataset::ros::bag::Bag;
 use sndt_host::dataset::source::BagOptions;
 use sndt_host::dataset::Dataset;
-use sndt_host::dataset::ros::bag::Bag;
 use std::path::Path;
 
 fuzz_target!(|data: &[u8]| {
