@@ -30,11 +30,16 @@ fn bad_option_values_are_refused_naming_the_option() {
         );
     }
     assert!(!std::path::Path::new(ply).exists(), "nothing written");
-    let cases: [(&[&str], &str, &str); 8] = [
+    let cases: [(&[&str], &str, &str); 9] = [
         (&["map", "synthetic:1:2", "--cell", "0"], "--cell", "> 0"),
         (&["map", "synthetic:1:2", "--cell", "NaN"], "--cell", "> 0"),
         (&["map", "synthetic:1:2", "--stride", "0"], "--stride", "0"),
         (&["map", "synthetic:1:2", "--every", "0"], "--every", "0"),
+        (
+            &["experiment", "synthetic:1:2", "--every", "0"],
+            "--every",
+            "0",
+        ),
         (
             &[
                 "map",

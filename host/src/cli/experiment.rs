@@ -98,8 +98,9 @@ pub struct ExperimentArgs {
     /// `Config::votes_per_frame`).
     #[arg(long, default_value_t = Config::DEFAULT.votes_per_frame)]
     pub votes_per_frame: u8,
-    /// Use every k-th frame of each trajectory (1 = all, as the paper).
-    #[arg(long, default_value_t = 1)]
+    /// Use every k-th frame of each trajectory (frames 0, k, 2k, ...; 1 = all, as the
+    /// paper). The same option as `map`'s, refusing 0 as it does.
+    #[arg(long, value_name = "K", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     pub every: u32,
     /// Output directory for tables and charts. Each finished run (one map on one
     /// trajectory) is also kept in `<out>/runs/` as soon as it is finished.
