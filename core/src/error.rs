@@ -47,6 +47,22 @@ pub enum Error {
     /// Snapshot: CRC matches but the content breaks an invariant (among them a stored
     /// config that [`crate::Config::validate`] refuses).
     SnapshotCorrupt,
+    /// A merge needs more voxels or blocks than the map's capacity (nothing was merged).
+    MapFull,
+    /// A merge of maps, records or a record stream from a map of another config or class
+    /// count.
+    ConfigMismatch,
+    /// A record's length or content breaks an invariant of the map's config (a key out of
+    /// range, a count above `n_max`, impossible sums, log-odds outside the clamps).
+    RecordCorrupt,
+    /// Record stream: a frame that is not valid COBS, or whose CRC-32 does not match
+    /// (corrupted on the link).
+    StreamChecksum,
+    /// Record stream: a frame out of sequence (missing, duplicated or reordered), a record
+    /// before the stream's start or after its end, or a frame of an unknown kind.
+    StreamOrder,
+    /// Record stream: it ended before its end frame.
+    StreamTruncated,
 }
 
 /// The [`crate::Config`] field that [`crate::Config::validate`] refused: the first one, in
@@ -171,6 +187,14 @@ impl fmt::Display for Error {
             Error::SnapshotCapacity => "snapshot holds more than this map's capacity",
             Error::SnapshotChecksum => "snapshot CRC-32 mismatch",
             Error::SnapshotCorrupt => "snapshot content is corrupt (or its config is invalid)",
+            Error::MapFull => "the merge needs more voxels or blocks than the map holds",
+            Error::ConfigMismatch => "merge of maps or records with another config or class count",
+            Error::RecordCorrupt => "record is corrupt or does not fit the map's config",
+            Error::StreamChecksum => "record stream frame corrupt (COBS or CRC-32 mismatch)",
+            Error::StreamOrder => {
+                "record stream frame out of sequence (missing, repeated or reordered)"
+            }
+            Error::StreamTruncated => "record stream ended before its end frame",
         };
         f.write_str(what)
     }

@@ -43,7 +43,9 @@
 //! | `geometry::{sqrt, dda, gaussian, camera}` | the square root; 3-D DDA voxel walk; [`Gaussian`], its prepared inverse with the eigenvalue floor; [`Pinhole`], depth images, [`depth_point`], pose checks |
 //! | `storage::table` | the fixed-capacity hash table with stable slots |
 //! | `storage::{block, voxel, votes}` | occupancy blocks; surface voxels: sums, decay, histogram; vote sampling of the histogram |
+//! | `storage::record` | one block or voxel as its snapshot record ([`Record`]), the [`RecordSink`] eviction hands them to |
 //! | `storage::{map, snapshot}` | the [`Map`] struct and its queries; snapshots and their [`SnapshotHeader`] |
+//! | `storage::{merge, stream}` | [`Map::merge`] and [`Map::merge_record`]; the COBS-framed record stream for a byte link ([`StreamWriter`], [`StreamReader`]) |
 //! | `integrate::{evict, frame}` | eviction of far entries when a table is full; the state of one frame being integrated, [`FrameReport`], [`Phase`] |
 //! | `integrate::{points, accumulate_point, accumulate}` | phase 1 in batches of 64 points: [`Phase::Points`] (pixels to world points, keys and offsets in vectorisable loops), then [`Phase::Accumulate`] (into voxel sums and votes; one point at a time in `accumulate_point`, which also holds the voxel lookup and accumulators) |
 //! | `integrate::{end_voxels, free_space}` | [`Phase::EndVoxels`] (one update per touched voxel); [`Phase::FreeSpace`] (rays, NDT-OM misses) |
@@ -131,7 +133,10 @@ pub use readout::render::INVALID_LABEL;
 pub use storage::map::{
     Map, MapStats, Occupancy, VoxelView, BLOCK_BYTES, BLOCK_TABLE_BYTES, MAP_HEADER_BYTES,
 };
+pub use storage::merge::RecordCount;
+pub use storage::record::{Record, RecordKind, RecordSink, BLOCK_RECORD_BYTES};
 pub use storage::snapshot::{
     SnapshotHeader, SNAPSHOT_BLOCK_BYTES, SNAPSHOT_HEADER_BYTES, SNAPSHOT_VERSION,
 };
+pub use storage::stream::{StreamEnd, StreamItem, StreamReader, StreamWriter, STREAM_FRAME_BYTES};
 pub use storage::votes::{next_vote_exponent, takes_vote, vote_hash, MAX_VOTE_EXPONENT};

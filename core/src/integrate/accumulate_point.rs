@@ -240,7 +240,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         if self.voxels.is_full() && !f.voxels_exhausted {
             // Within a frame the evictable set only shrinks: once a scan finds nothing,
             // later inserts of this frame skip the O(capacity) scan.
-            f.voxels_exhausted = self.evict_voxels(&f.origin_key, f.stamp) == 0;
+            f.voxels_exhausted = self.evict_voxels(f) == 0;
             f.voxel_cache = (0, 0);
         }
         let vs = self.voxels.insert(Voxel::new(key)).ok()?;

@@ -6,17 +6,24 @@
 //! it stay, so a frame never evicts what it is updating. The result depends only on the
 //! map's content and the sensor position, not on table order, and the scan is two passes
 //! over the table with a fixed-size histogram (no sorting, no allocation).
+//!
+//! With a sink ([`Map::integrate_spilling`]) every evicted entry first goes out as a
+//! record: an evicted block's voxels, then the block; an evicted voxel on its own.
 
+use crate::integrate::frame::{FrameReport, FrameState};
 use crate::key::VoxelKey;
 use crate::storage::block::{bits, Block};
 use crate::storage::map::Map;
+use crate::storage::record::{block_record, voxel_record, Record, RecordKind, VOXEL_RECORD_MAX};
 use crate::storage::table::Entry;
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
-    /// Evicts occupancy blocks (with their NDT voxels) farthest from `center`, not touched
-    /// in frame `stamp`. Returns how many blocks went.
-    pub(crate) fn evict_blocks(&mut self, center: &VoxelKey, stamp: u16) -> u32 {
-        let c = center.block();
+    /// Evicts occupancy blocks (with their NDT voxels) farthest from the frame's sensor,
+    /// not touched in the frame; spills them to the frame's sink. Returns how many blocks
+    /// went.
+    pub(crate) fn evict_blocks(&mut self, f: &mut FrameState) -> u32 {
+        let stamp = f.stamp;
+        let c = f.origin_key.block();
         let dist = |b: &Block| block_distance(b.packed_key(), c);
         let mut hist = [0u32; DISTANCE_BINS];
         for b in self.blocks.slots.iter().filter(|b| b.packed_key() != 0) {
@@ -38,9 +45,18 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             for cell in bits(b.surface) {
                 let key = VoxelKey::from_block_cell(b.packed_key(), cell);
                 if let Some(v) = self.voxels.find(key.packed()) {
+                    self.spill_voxel(f, v);
                     self.voxels.remove(v);
                     self.stats.voxels_evicted += 1;
                 }
+            }
+            if let Some(sink) = f.sink.as_deref_mut() {
+                let mut buf = [0u8; 160];
+                let record = Record {
+                    kind: RecordKind::Block,
+                    bytes: block_record(&b, &mut buf),
+                };
+                count(&mut f.report, sink.take(record));
             }
             self.blocks.remove(s);
             evicted += 1;
@@ -49,9 +65,12 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         evicted
     }
 
-    /// Evicts NDT voxels farthest from `center` that got no points in frame `stamp`; their
-    /// occupancy stays in the block layer. Returns how many went.
-    pub(crate) fn evict_voxels(&mut self, center: &VoxelKey, stamp: u16) -> u32 {
+    /// Evicts NDT voxels farthest from the frame's sensor that got no points in the frame
+    /// (their occupancy stays in the block layer); spills them to the frame's sink.
+    /// Returns how many went.
+    pub(crate) fn evict_voxels(&mut self, f: &mut FrameState) -> u32 {
+        let (center, stamp) = (f.origin_key, f.stamp);
+        let center = &center;
         let mut hist = [0u32; DISTANCE_BINS];
         for v in self.voxels.slots.iter().filter(|v| v.packed_key() != 0) {
             let key = v.voxel_key();
@@ -74,6 +93,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             if bin(key.chebyshev(center)) < threshold || self.hit_this_frame(&key, stamp) {
                 continue;
             }
+            self.spill_voxel(f, s);
             self.voxels.remove(s);
             let found = self.blocks.find(key.block());
             if let Some(b) = found.and_then(|b| self.blocks.get_mut(b)) {
@@ -85,6 +105,18 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         evicted
     }
 
+    /// Hands the voxel in slot `s` to the frame's sink, if there is one.
+    fn spill_voxel(&self, f: &mut FrameState, s: usize) {
+        if let (Some(sink), Some(v)) = (f.sink.as_deref_mut(), self.voxels.get(s)) {
+            let mut buf = [0u8; VOXEL_RECORD_MAX];
+            let record = Record {
+                kind: RecordKind::Voxel,
+                bytes: voxel_record(v, &mut buf),
+            };
+            count(&mut f.report, sink.take(record));
+        }
+    }
+
     fn hit_this_frame(&self, key: &VoxelKey, stamp: u16) -> bool {
         match self
             .blocks
@@ -94,6 +126,15 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             Some(b) => b.stamp == stamp && b.hit & (1u64 << key.cell()) != 0,
             None => false,
         }
+    }
+}
+
+/// Counts a record the sink took or refused.
+fn count(report: &mut FrameReport, taken: bool) {
+    if taken {
+        report.records_spilled += 1;
+    } else {
+        report.records_dropped += 1;
     }
 }
 

@@ -11,6 +11,7 @@ use crate::geometry::camera::validate_pose;
 use crate::key::{axis_key, floor_i32, VoxelKey, KEY_LIMIT};
 use crate::storage::block::Block;
 use crate::storage::map::Map;
+use crate::storage::record::RecordSink;
 use crate::storage::table::{Entry, NIL};
 #[cfg(doc)]
 use crate::storage::votes::vote_max;
@@ -52,6 +53,12 @@ pub struct FrameReport {
     pub voxels_evicted: u32,
     /// Occupancy blocks evicted to make room.
     pub blocks_evicted: u32,
+    /// Records of evicted voxels and blocks the sink took
+    /// ([`Map::integrate_spilling`]); 0 without a sink.
+    pub records_spilled: u32,
+    /// Records of evicted voxels and blocks the sink refused: lost. 0 without a sink
+    /// (then evictions are only counted in `voxels_evicted` and `blocks_evicted`).
+    pub records_dropped: u32,
 }
 
 /// A step of a frame's integration, reported at its start to the observer of
@@ -182,7 +189,7 @@ fn hash_in_u32(packed: u64, bits: u32) -> usize {
 }
 
 /// Per-frame state; lives on the stack during one integration.
-pub(crate) struct FrameState {
+pub(crate) struct FrameState<'s> {
     pub(crate) rot: Matrix3<f32>,
     pub(crate) origin: [f32; 3],
     pub(crate) origin_s: [f32; 3],
@@ -222,9 +229,11 @@ pub(crate) struct FrameState {
     pub(crate) blocks_exhausted: bool,
     pub(crate) report: FrameReport,
     pub(crate) evicted_before: (u64, u64),
+    /// Where evicted entries go as records, if the caller gave a sink.
+    pub(crate) sink: Option<&'s mut dyn RecordSink>,
 }
 
-impl FrameState {
+impl FrameState<'_> {
     /// A sensor-frame point in world coordinates (`f32`, the key convention).
     #[inline]
     pub(crate) fn to_world(&self, p: &[f32; 3]) -> [f32; 3] {
@@ -265,7 +274,10 @@ impl FrameState {
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// Starts a frame at `pose` (sensor to world): checks the pose, keys the sensor origin
     /// and stamps the frame. Nothing in the map changes on an error.
-    pub(crate) fn begin_frame(&mut self, pose: &Isometry3<f32>) -> Result<FrameState, Error> {
+    pub(crate) fn begin_frame<'s>(
+        &mut self,
+        pose: &Isometry3<f32>,
+    ) -> Result<FrameState<'s>, Error> {
         validate_pose(pose)?;
         let t = pose.translation.vector;
         let h = self.config.cell_size;
@@ -306,6 +318,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             blocks_exhausted: false,
             report: FrameReport::default(),
             evicted_before: (self.stats.voxels_evicted, self.stats.blocks_evicted),
+            sink: None,
         })
     }
 
@@ -379,7 +392,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             Some(bs) => bs,
             None => {
                 if self.blocks.is_full() && !f.blocks_exhausted {
-                    f.blocks_exhausted = self.evict_blocks(&f.origin_key, f.stamp) == 0;
+                    f.blocks_exhausted = self.evict_blocks(f) == 0;
                     f.voxel_cache = (0, 0);
                 }
                 let bs = self.blocks.insert(Block::new(packed)).ok()?;

@@ -41,6 +41,7 @@ use crate::integrate::frame::{FrameReport, FrameState, Phase, MAX_FRAME_POINTS};
 use crate::integrate::points::{Batch, BATCH, TILE_COLS};
 use crate::labels::{LabeledPoint, Labels};
 use crate::storage::map::Map;
+use crate::storage::record::RecordSink;
 use nalgebra::Isometry3;
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
@@ -67,7 +68,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         pose: &Isometry3<f32>,
         points: &[LabeledPoint],
     ) -> Result<FrameReport, Error> {
-        self.integrate_observed(pose, points, |_| {})
+        self.integrate_points(pose, points, |_| {}, None)
     }
 
     /// Integrates a depth image with labels (see [`DepthImage`]); invalid depths are
@@ -77,7 +78,50 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         pose: &Isometry3<f32>,
         image: &DepthImage<'_>,
     ) -> Result<FrameReport, Error> {
-        self.integrate_depth_observed(pose, image, |_| {})
+        self.integrate_depth_image(pose, image, |_| {}, None)
+    }
+
+    /// [`Map::integrate`] that hands every voxel and block it evicts to `sink` as a
+    /// record (an evicted block's voxels first, then the block), so that nothing leaves
+    /// the map unseen: a host can merge them ([`Map::merge_record`]) into a larger map.
+    /// The report counts the records the sink took (`records_spilled`) and refused
+    /// (`records_dropped`). The map is the same as without a sink.
+    ///
+    /// ```
+    /// use sndt_core::*;
+    /// // Room for 4 voxels; 8 frames of one voxel each evict the far ones.
+    /// let mut map: Map<4, 64, 2> = Map::new(Config::with_cell_size(1.0));
+    /// let mut global: Map<64, 64, 2> = Map::new(Config::with_cell_size(1.0));
+    /// let mut spilled = 0;
+    /// for i in 0..8 {
+    ///     let p = [LabeledPoint::new(Point3::new(i as f32 + 0.5, 0.5, 2.5), Labels::top1(1))];
+    ///     let mut sink = |r: Record<'_>| global.merge_record(r).is_ok();
+    ///     let report = map.integrate_spilling(&Isometry3::identity(), &p, &mut sink).unwrap();
+    ///     assert_eq!(report.records_dropped, 0);
+    ///     spilled += report.records_spilled;
+    /// }
+    /// assert!(spilled > 0 && map.len() <= 4);
+    /// global.merge(&map).unwrap(); // the device's last map completes the global one
+    /// assert_eq!(global.len(), 8);
+    /// ```
+    pub fn integrate_spilling(
+        &mut self,
+        pose: &Isometry3<f32>,
+        points: &[LabeledPoint],
+        sink: &mut dyn RecordSink,
+    ) -> Result<FrameReport, Error> {
+        self.integrate_points(pose, points, |_| {}, Some(sink))
+    }
+
+    /// [`Map::integrate_depth`] that hands every voxel and block it evicts to `sink`, as
+    /// [`Map::integrate_spilling`] does.
+    pub fn integrate_depth_spilling(
+        &mut self,
+        pose: &Isometry3<f32>,
+        image: &DepthImage<'_>,
+        sink: &mut dyn RecordSink,
+    ) -> Result<FrameReport, Error> {
+        self.integrate_depth_image(pose, image, |_| {}, Some(sink))
     }
 
     /// [`Map::integrate`], reporting the start of every [`Phase`] to `on_phase` (for
@@ -86,12 +130,24 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         &mut self,
         pose: &Isometry3<f32>,
         points: &[LabeledPoint],
+        on_phase: impl FnMut(Phase),
+    ) -> Result<FrameReport, Error> {
+        self.integrate_points(pose, points, on_phase, None)
+    }
+
+    /// The steps of [`Map::integrate`], with an observer and a sink.
+    fn integrate_points(
+        &mut self,
+        pose: &Isometry3<f32>,
+        points: &[LabeledPoint],
         mut on_phase: impl FnMut(Phase),
+        sink: Option<&mut dyn RecordSink>,
     ) -> Result<FrameReport, Error> {
         if points.len() > MAX_FRAME_POINTS {
             return Err(Error::FrameTooLarge);
         }
         let mut f = self.begin_frame(pose)?;
+        f.sink = sink;
         let mut batch = Batch::new();
         for chunk in points.chunks(BATCH) {
             on_phase(Phase::Points);
@@ -122,13 +178,25 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         &mut self,
         pose: &Isometry3<f32>,
         image: &DepthImage<'_>,
+        on_phase: impl FnMut(Phase),
+    ) -> Result<FrameReport, Error> {
+        self.integrate_depth_image(pose, image, on_phase, None)
+    }
+
+    /// The steps of [`Map::integrate_depth`], with an observer and a sink.
+    fn integrate_depth_image(
+        &mut self,
+        pose: &Isometry3<f32>,
+        image: &DepthImage<'_>,
         mut on_phase: impl FnMut(Phase),
+        sink: Option<&mut dyn RecordSink>,
     ) -> Result<FrameReport, Error> {
         image.validate()?;
         if image.samples() > MAX_FRAME_POINTS {
             return Err(Error::FrameTooLarge);
         }
         let mut f = self.begin_frame(pose)?;
+        f.sink = sink;
         let rays = PixelRays::new(&image.camera);
         let mut batch = Batch::new();
         let stride = image.stride as usize;

@@ -26,87 +26,28 @@
 use crate::config::{to_fixed, Config, MissModel};
 use crate::crc::{crc32, Crc32};
 use crate::error::Error;
-use crate::key::{join_key, order, split_key, VoxelKey, KEY_LIMIT};
+use crate::key::{order, split_key, VoxelKey};
 use crate::storage::block::Block;
 use crate::storage::map::{Map, MapStats};
+use crate::storage::record::{
+    block_key_ok, block_record, cells_outside_key_range, sums_possible, voxel_record_head, Reader,
+    Writer, BLOCK_RECORD_BYTES, VOXEL_RECORD_HEAD_BYTES,
+};
 use crate::storage::table::Entry;
 use crate::storage::votes::MAX_VOTE_EXPONENT;
-use crate::storage::voxel::{scatter, Voxel};
+use crate::storage::voxel::Voxel;
 
 /// Snapshot format version written by this build.
 pub const SNAPSHOT_VERSION: u16 = 2;
 /// Bytes before the first block record.
 pub const SNAPSHOT_HEADER_BYTES: usize = 88;
 /// Bytes of one block record.
-pub const SNAPSHOT_BLOCK_BYTES: usize = 142;
+pub const SNAPSHOT_BLOCK_BYTES: usize = BLOCK_RECORD_BYTES;
 const MAGIC: &[u8; 4] = b"SNDT";
-
-struct Writer<'a> {
-    buf: &'a mut [u8],
-    pos: usize,
-}
-
-impl<'a> Writer<'a> {
-    /// Appends `bytes`. Callers size the buffer first (`snapshot_len`, fixed records), so
-    /// they always fit; were they not to, they are left out instead of halting.
-    fn put(&mut self, bytes: &[u8]) {
-        let rest = self.buf.get_mut(self.pos..);
-        if let Some(dst) = rest.and_then(|r| r.get_mut(..bytes.len())) {
-            dst.copy_from_slice(bytes);
-            self.pos += bytes.len();
-        }
-    }
-
-    /// The bytes written so far.
-    fn written(self) -> &'a [u8] {
-        let Writer { buf, pos } = self;
-        buf.get(..pos).unwrap_or(&[])
-    }
-}
-
-struct Reader<'a> {
-    buf: &'a [u8],
-    pos: usize,
-}
-
-impl Reader<'_> {
-    fn take<const N: usize>(&mut self) -> [u8; N] {
-        let mut out = [0u8; N];
-        if let Some(s) = self.buf.get(self.pos..self.pos + N) {
-            out.copy_from_slice(s);
-        }
-        self.pos += N;
-        out
-    }
-    fn u8(&mut self) -> u8 {
-        self.take::<1>()[0]
-    }
-    fn u16(&mut self) -> u16 {
-        u16::from_le_bytes(self.take())
-    }
-    fn i16(&mut self) -> i16 {
-        i16::from_le_bytes(self.take())
-    }
-    fn u32(&mut self) -> u32 {
-        u32::from_le_bytes(self.take())
-    }
-    fn i32(&mut self) -> i32 {
-        i32::from_le_bytes(self.take())
-    }
-    fn f32(&mut self) -> f32 {
-        f32::from_bits(self.u32())
-    }
-    fn u64(&mut self) -> u64 {
-        u64::from_le_bytes(self.take())
-    }
-    fn key(&mut self) -> u64 {
-        join_key([self.u16(), self.u16(), self.u16()])
-    }
-}
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// Bytes of one voxel record in a snapshot.
-    pub const SNAPSHOT_VOXEL_BYTES: usize = 47 + C;
+    pub const SNAPSHOT_VOXEL_BYTES: usize = VOXEL_RECORD_HEAD_BYTES + C;
 
     /// Exact length of this map's snapshot.
     pub fn snapshot_len(&self) -> usize {
@@ -176,7 +117,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     /// The header of this map's snapshot.
-    fn snapshot_header(&self) -> SnapshotHeader {
+    pub(crate) fn snapshot_header(&self) -> SnapshotHeader {
         SnapshotHeader {
             classes: C as u16,
             voxel_capacity: V as u32,
@@ -348,31 +289,6 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 }
 
-fn block_record<'a>(b: &Block, out: &'a mut [u8; 160]) -> &'a [u8] {
-    let mut w = Writer { buf: out, pos: 0 };
-    for k in b.key {
-        w.put(&k.to_le_bytes());
-    }
-    for l in b.cells {
-        w.put(&l.to_le_bytes());
-    }
-    w.put(&b.surface.to_le_bytes());
-    w.written()
-}
-
-fn voxel_record_head<'a, const C: usize>(v: &Voxel<C>, out: &'a mut [u8; 160]) -> &'a [u8] {
-    let mut w = Writer { buf: out, pos: 0 };
-    for k in v.key {
-        w.put(&k.to_le_bytes());
-    }
-    w.put(&v.n.to_le_bytes());
-    for x in v.s1.iter().chain(v.s2.iter()) {
-        w.put(&x.to_le_bytes());
-    }
-    w.put(&[v.vote_exponent()]);
-    w.written()
-}
-
 /// A snapshot's header: the config and frame count of the map that wrote it, its class
 /// count and capacities, and how many records follow. Read it to learn what a snapshot
 /// holds without loading it (the [`Map`] type to read it into, the config a refused
@@ -501,7 +417,7 @@ impl SnapshotHeader {
     }
 
     /// The header's bytes, in the layout of the module doc.
-    fn encode(&self, hdr: &mut [u8; SNAPSHOT_HEADER_BYTES]) {
+    pub(crate) fn encode(&self, hdr: &mut [u8; SNAPSHOT_HEADER_BYTES]) {
         let mut w = Writer { buf: hdr, pos: 0 };
         let c = &self.config;
         w.put(MAGIC);
@@ -637,12 +553,6 @@ fn read_config(r: &mut Reader) -> (Config, u8) {
 /// clamps, nothing in cells outside the key range, and one surface bit per voxel record.
 fn check_blocks(r: &mut Reader, nb: usize, nv: usize, c: &Config) -> Result<(), Error> {
     let (lo, hi) = (to_fixed(c.clamp_min), to_fixed(c.clamp_max));
-    let block_key_ok = |k: u64| {
-        (0..3).all(|i| {
-            let v = ((k >> (32 - 16 * i)) & 0xffff) as i32 - 32768;
-            (-(KEY_LIMIT + 1) / 4..=KEY_LIMIT / 4).contains(&v)
-        })
-    };
     let mut last = None;
     let mut surface_bits = 0usize;
     for _ in 0..nb {
@@ -668,51 +578,6 @@ fn check_blocks(r: &mut Reader, nb: usize, nv: usize, c: &Config) -> Result<(), 
         return Err(Error::SnapshotCorrupt);
     }
     Ok(())
-}
-
-/// Cells of packed block `k` outside the key range: blocks at coordinate -8192 hold one
-/// layer of cells at key -32768 (one below `-KEY_LIMIT`), which must stay empty.
-fn cells_outside_key_range(k: u64) -> u64 {
-    let mut outside = 0u64;
-    for axis in 0..3 {
-        if ((k >> (32 - 16 * axis)) & 0xffff) as i32 - 32768 == -(KEY_LIMIT + 1) / 4 {
-            for cell in 0..64u32 {
-                if (cell >> (2 * axis)) & 3 == 0 {
-                    outside |= 1 << cell;
-                }
-            }
-        }
-    }
-    outside
-}
-
-/// Whether sums `n, S1, S2` can come from points of this map: each within `n` times its
-/// largest offset, and a scatter matrix that is positive semi-definite up to the slack
-/// decay's rounding allows.
-fn sums_possible(n: i64, s1: &[i64; 3], s2: &[i64; 6], qhalf: i64) -> bool {
-    let bound1 = n * qhalf;
-    let bound2 = n * qhalf * qhalf;
-    if s1.iter().any(|x| x.abs() > bound1) || s2.iter().any(|x| x.abs() > bound2) {
-        return false;
-    }
-    // Sums of real points give a positive semi-definite scatter matrix
-    // M = n S2 - S1 S1^T. Decay rounds each scaled sum on its own, which can move every
-    // entry of M by about n (qhalf + 1/2) (and new points can at most double that before
-    // the next decay), so each entry may be off by a slack of 2 n (qhalf + 1). The stored
-    // M must then be within the slack of a PSD matrix: diagonals at least -slack, and each
-    // off-diagonal, shrunk by the slack, within the geometric mean of the grown diagonals.
-    // Anything beyond cannot come from this map.
-    let m = scatter(n, s1, s2).map(|x| x as i128);
-    let slack = 2 * n as i128 * (qhalf as i128 + 1);
-    let (dx, dy, dz) = (m[0] + slack, m[3] + slack, m[5] + slack);
-    let off = |x: i128| (x.abs() - slack).max(0);
-    let (mxy, mxz, myz) = (off(m[1]), off(m[2]), off(m[4]));
-    !(dx < 0
-        || dy < 0
-        || dz < 0
-        || mxy * mxy > dx * dy
-        || mxz * mxz > dx * dz
-        || myz * myz > dy * dz)
 }
 
 #[cfg(test)]

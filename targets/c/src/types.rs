@@ -45,13 +45,19 @@ impl From<Error> for sndt_status {
             Error::InvalidConfig(_) => SNDT_ERR_CONFIG,
             Error::InvalidPose | Error::InvalidImage => SNDT_ERR_BAD_ARG,
             Error::PoseOutOfRange => SNDT_ERR_OUT_OF_RANGE,
-            Error::FrameTooLarge | Error::SnapshotCapacity => SNDT_ERR_CAPACITY,
+            Error::FrameTooLarge | Error::SnapshotCapacity | Error::MapFull => SNDT_ERR_CAPACITY,
             Error::BufferTooSmall => SNDT_ERR_BUFFER_TOO_SMALL,
             Error::SnapshotTruncated
             | Error::SnapshotMagic
             | Error::SnapshotChecksum
-            | Error::SnapshotCorrupt => SNDT_ERR_CORRUPT,
-            Error::SnapshotVersion | Error::SnapshotClasses => SNDT_ERR_INCOMPATIBLE,
+            | Error::SnapshotCorrupt
+            | Error::RecordCorrupt
+            | Error::StreamChecksum
+            | Error::StreamOrder
+            | Error::StreamTruncated => SNDT_ERR_CORRUPT,
+            Error::SnapshotVersion | Error::SnapshotClasses | Error::ConfigMismatch => {
+                SNDT_ERR_INCOMPATIBLE
+            }
         }
     }
 }
