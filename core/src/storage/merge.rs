@@ -134,6 +134,22 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         Ok(())
     }
 
+    /// Checks a record as [`Map::merge_record`] would, without merging it: `Ok` when it is
+    /// a valid record for this map's config (room is not checked).
+    ///
+    /// ```
+    /// use sndt_core::*;
+    /// let map: Map<64, 16, 4> = Map::new(Config::DEFAULT);
+    /// let bad = Record { kind: RecordKind::Voxel, bytes: &[0u8; 51] }; // count 0
+    /// assert_eq!(map.check_record(bad), Err(Error::RecordCorrupt));
+    /// ```
+    pub fn check_record(&self, record: Record<'_>) -> Result<(), Error> {
+        match record.kind {
+            RecordKind::Voxel => decode_voxel::<C>(record.bytes, &self.config).map(|_| ()),
+            RecordKind::Block => decode_block(record.bytes, &self.config).map(|_| ()),
+        }
+    }
+
     /// Merges `other` into the map: its records in the order of [`Map::write_records`], and
     /// its frame count. Both maps need the same config ([`Error::ConfigMismatch`]) and the
     /// map room for the union ([`Error::MapFull`]); on an error nothing is merged.
