@@ -13,6 +13,7 @@ mod fuzz;
 mod gaussian;
 mod hypersim;
 mod layout;
+mod merge;
 mod permutation;
 mod points_export;
 mod prepared;
