@@ -19,7 +19,7 @@ use crate::dataset::frame::{key_range_error, Frame, LabelSource, Rays};
 use anyhow::{anyhow, Result};
 use rayon::prelude::*;
 use sndt_core::{
-    Config, Depth, DepthImage, LabelImage, Labels, Map, Point3, Vector3, INVALID_LABEL,
+    Config, Depth, DepthImage, LabelImage, Labels, Map, Point3, RecordSink, Vector3, INVALID_LABEL,
 };
 
 /// The core map the host evaluates, compares and exports with: 2^19 surface voxels, 2^17
@@ -137,6 +137,18 @@ pub fn integrate_frame<const V: usize, const B: usize, const C: usize>(
     source: LabelSource,
     stride: u32,
 ) -> Result<sndt_core::FrameReport> {
+    integrate_frame_spilling(map, frame, source, stride, None)
+}
+
+/// [`integrate_frame`], handing what the map evicts to `sink` when there is one
+/// (`Map::integrate_depth_spilling`).
+pub fn integrate_frame_spilling<const V: usize, const B: usize, const C: usize>(
+    map: &mut Map<V, B, C>,
+    frame: &Frame,
+    source: LabelSource,
+    stride: u32,
+    sink: Option<&mut dyn RecordSink>,
+) -> Result<sndt_core::FrameReport> {
     let cell = map.config().cell_size;
     let err = |e: sndt_core::Error| match e {
         sndt_core::Error::PoseOutOfRange => anyhow!(
@@ -178,11 +190,19 @@ pub fn integrate_frame<const V: usize, const B: usize, const C: usize>(
                 labels,
                 stride,
             };
-            map.integrate_depth(&frame.pose, &image).map_err(err)
+            match sink {
+                Some(sink) => map.integrate_depth_spilling(&frame.pose, &image, sink),
+                None => map.integrate_depth(&frame.pose, &image),
+            }
+            .map_err(err)
         }
         Rays::PerPixel { .. } => {
             let points = frame.camera_points(source, stride);
-            map.integrate(&frame.pose, &points).map_err(err)
+            match sink {
+                Some(sink) => map.integrate_spilling(&frame.pose, &points, sink),
+                None => map.integrate(&frame.pose, &points),
+            }
+            .map_err(err)
         }
     }
 }

@@ -3,7 +3,9 @@
 
 use crate::dataset::open::open_spec;
 use crate::dataset::source::OpenOptions;
-use crate::embedded::budget::{pick_capacity, report, simulate_dataset, table, CAPACITIES};
+use crate::embedded::budget::{
+    pick_capacity, report, simulate_dataset, spill_table, table, CAPACITIES,
+};
 use anyhow::{bail, Result};
 use sndt_core::Config;
 use std::path::PathBuf;
@@ -12,7 +14,8 @@ use std::path::PathBuf;
 #[derive(clap::Args, Clone, Debug)]
 #[command(after_help = "Examples:
   sndt budget --capacity 4096 --blocks 512 --cell 0.1
-  sndt budget data/synth --capacity 16384")]
+  sndt budget data/synth --capacity 16384
+  sndt budget synthetic:floor --capacity 4096 --blocks 512 --fps 10")]
 pub struct BudgetArgs {
     /// Dataset whose trajectories to simulate at this capacity: a directory (prepared
     /// layout or raw Hypersim), a ROS 2 bag (`.mcap`) or `synthetic[:SCENES:FRAMES]`
@@ -39,6 +42,13 @@ pub struct BudgetArgs {
     /// Use every stride-th pixel in both directions of the dataset's frames (1 = all).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     pub stride: u32,
+    /// With a dataset: frames per second for the spill bandwidth (bytes/s of evicted
+    /// records sent to a host).
+    #[arg(long, default_value_t = 10.0, value_parser = super::parse::positive)]
+    pub fps: f32,
+    /// With a dataset: the UART baud rate the spill bandwidth is compared with.
+    #[arg(long, default_value_t = 921_600)]
+    pub baud: u32,
 }
 
 /// Runs `sndt budget` and prints its report.
@@ -56,7 +66,7 @@ pub fn run(a: &BudgetArgs) -> Result<()> {
 /// use sndt_host::cli::budget::{budget, BudgetArgs};
 /// let mut a = BudgetArgs { dataset: None, cell: 0.1, classes: 40, capacity: 4096,
 ///                          blocks: Some(512), dataset_option: None, split: "test".into(),
-///                          stride: 1 };
+///                          stride: 1, fps: 10.0, baud: 921_600 };
 /// assert!(budget(&a).unwrap().contains("= 485504 bytes"));
 /// a.classes = 0;
 /// assert!(budget(&a).is_err());
@@ -105,5 +115,6 @@ pub fn budget(a: &BudgetArgs) -> Result<String> {
     }
     let rows = simulate_dataset(ds.as_ref(), config, cap, a.stride)?;
     s += &table(&rows, cap, (capacity, blocks));
+    s += &spill_table(&rows, a.fps as f64, a.baud);
     Ok(s)
 }

@@ -6,7 +6,8 @@ use crate::cli::open_args::{EveryArgs, OpenArgs};
 use crate::cli::parse::check_config;
 use crate::dataset::frame::LabelSource;
 use crate::dataset::open::open_spec;
-use crate::eval::evaluate::{evaluate, EvalOptions, Evaluation};
+use crate::eval::evaluate::{evaluate, EvalOptions, Evaluation, SpillSummary};
+use crate::global_map::{DeviceCapacity, Spill};
 use crate::output::progress::progress;
 use anyhow::{Context, Result};
 use sndt_core::{Config, ConfigField};
@@ -16,7 +17,8 @@ use std::path::{Path, PathBuf};
 #[derive(clap::Args, Clone, Debug)]
 #[command(after_help = "Examples:
   sndt map synthetic:2:20 --cell 0.05 --save-maps --out out/map
-  sndt map robot.mcap --every 2 --world-frame odom --mcap out/robot/map.mcap --mcap-interval 10")]
+  sndt map robot.mcap --every 2 --world-frame odom --mcap out/robot/map.mcap --mcap-interval 10
+  sndt map synthetic:floor --device 4096,512 --out out/floor")]
 pub struct MapArgs {
     /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`) or
     /// `synthetic[:SCENES:FRAMES]` (rendered on the fly).
@@ -54,6 +56,14 @@ pub struct MapArgs {
     /// plays back as a growing map (default: only after the last frame).
     #[arg(long, value_name = "N", value_parser = super::parse::at_least_one)]
     pub mcap_interval: Option<usize>,
+    /// Map as a co-processor would: a device map of VOXELS,BLOCKS capacity (1024,128,
+    /// 4096,512 or 16384,2048) hands everything it evicts to a global map that grows,
+    /// and the merged global map is evaluated. Prints what the spill costs per frame.
+    #[arg(long, value_name = "V,B", value_parser = DeviceCapacity::parse)]
+    pub device: Option<DeviceCapacity>,
+    /// With --device: evaluate the device map alone (what the co-processor keeps).
+    #[arg(long, requires = "device")]
+    pub device_only: bool,
 }
 
 /// Runs `sndt map`: maps and evaluates every trajectory, prints the per-trajectory lines
@@ -92,6 +102,14 @@ pub fn run(a: &MapArgs) -> Result<()> {
             mcap: a.mcap.clone(),
             mcap_interval: a.mcap_interval,
             mcap_world: a.open.world_frame.clone(),
+            device: a.device.map(|d| {
+                let readout = if a.device_only {
+                    Spill::DeviceOnly
+                } else {
+                    Spill::Merged
+                };
+                (d, readout)
+            }),
             ..EvalOptions::new(config, labels)
         },
         &|| bar.inc(1),
@@ -108,6 +126,9 @@ pub fn run(a: &MapArgs) -> Result<()> {
             t.blocks,
             t.evicted
         );
+        if let Some(s) = &t.spill {
+            print_spill(s, a.device_only);
+        }
     }
     println!(
         "{} frames mapped, {} skipped (bad input, named in the warnings)",
@@ -121,6 +142,37 @@ pub fn run(a: &MapArgs) -> Result<()> {
         labels
     );
     write_metrics(&eval, &table, &a.out)
+}
+
+/// The spill figures of one trajectory.
+fn print_spill(s: &SpillSummary, device_only: bool) {
+    let st = &s.stats;
+    println!(
+        "    device {},{}: {} voxels, {} blocks at the end, {} points and {} misses dropped \
+         (full); spilled {} records ({} dropped), stream {:.0} bytes/frame mean, {} max, \
+         {} for the final map",
+        s.device.0,
+        s.device.1,
+        s.device_voxels,
+        s.device_blocks,
+        st.dropped_points,
+        st.dropped_misses,
+        st.records,
+        st.dropped,
+        st.mean_bytes(),
+        st.max_bytes(),
+        st.final_bytes
+    );
+    println!(
+        "    global map: tier {} ({:.0} MiB){}",
+        s.global_tier,
+        s.global_bytes as f64 / (1 << 20) as f64,
+        if device_only {
+            "; scored: the device map alone"
+        } else {
+            "; scored: the merged global map"
+        }
+    );
 }
 
 /// Writes the metrics table (`metrics.md`) and all numbers (`metrics.json`) into `out`.

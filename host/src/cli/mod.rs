@@ -19,6 +19,7 @@ pub mod export;
 pub mod info;
 pub mod labels;
 pub mod map;
+pub mod merge;
 pub mod open_args;
 pub mod parse;
 pub mod points;
@@ -41,7 +42,8 @@ struct Cli {
 enum Command {
     /// Map a small synthetic split (no download) with GT and predicted labels; metrics and pictures.
     Demo(demo::DemoArgs),
-    /// Exact memory of a Map<N, B, K>; with a dataset, peak voxels and evictions per trajectory.
+    /// Exact memory of a Map<N, B, K>; with a dataset, peak voxels, evictions and the spill
+    /// bandwidth per trajectory.
     Budget(budget::BudgetArgs),
     /// Write (--out) or check (--check) the cross-architecture test vector of the firmware.
     Testvector(testvector::TestvectorArgs),
@@ -57,6 +59,9 @@ enum Command {
     /// Map every trajectory of a dataset and evaluate the back-projections with the paper's
     /// evaluation protocol (docs/ARCHITECTURE.md).
     Map(map::MapArgs),
+    /// Merge saved maps and devices' record streams into one map (two robots, two
+    /// sessions, a co-processor's spill).
+    Merge(merge::MergeArgs),
     /// Write a map's Gaussians as a PLY (points or ellipsoids) for MeshLab/CloudCompare.
     Export(export::ExportArgs),
     /// Integrate frames into the core and the f64 reference and compare them per cell size.
@@ -77,6 +82,7 @@ pub fn main() -> Result<()> {
         Command::Synth(a) => synth::run(&a),
         Command::Info(a) => info::run(&a),
         Command::Map(a) => map::run(&a),
+        Command::Merge(a) => merge::run(&a),
         Command::Export(a) => export::run(&a),
         Command::Compare(a) => compare::run(&a),
         Command::Experiment(a) => experiment::run(&a),

@@ -11,8 +11,8 @@
 use crate::dataset::frame::{Frame, LabelSource};
 use anyhow::{bail, Result};
 use sndt_core::{
-    Config, Map, BLOCK_BYTES, BLOCK_TABLE_BYTES, MAP_HEADER_BYTES, SNAPSHOT_BLOCK_BYTES,
-    SNAPSHOT_HEADER_BYTES,
+    Config, Map, Record, StreamWriter, BLOCK_BYTES, BLOCK_TABLE_BYTES, MAP_HEADER_BYTES,
+    SNAPSHOT_BLOCK_BYTES, SNAPSHOT_HEADER_BYTES, STREAM_FRAME_BYTES,
 };
 
 /// Fixed bytes of a surface voxel before its `C`-byte class histogram (sums, count, key,
@@ -126,6 +126,23 @@ pub struct TrajectoryBudget {
     pub evicted_blocks: u64,
     /// Point and free-space updates dropped (nothing could be evicted).
     pub dropped: u64,
+    /// Records of evicted voxels and blocks (what a co-processor would send the host).
+    pub spilled_records: u64,
+    /// Bytes of the framed record stream each frame (COBS frames with CRC, as
+    /// `sndt_core::StreamWriter` writes them for a UART).
+    pub spill_bytes: Vec<u64>,
+}
+
+impl TrajectoryBudget {
+    /// Mean spill stream bytes per frame.
+    pub fn mean_spill_bytes(&self) -> f64 {
+        self.spill_bytes.iter().sum::<u64>() as f64 / self.spill_bytes.len().max(1) as f64
+    }
+
+    /// Largest spill stream bytes of one frame.
+    pub fn max_spill_bytes(&self) -> u64 {
+        self.spill_bytes.iter().copied().max().unwrap_or(0)
+    }
 }
 
 fn simulate_with<const V: usize, const B: usize>(
@@ -136,11 +153,22 @@ fn simulate_with<const V: usize, const B: usize>(
     let mut map: Box<Map<V, B, 40>> =
         crate::semantic_map::boxed_map(config).map_err(|e| anyhow::anyhow!("config: {e}"))?;
     let mut out = TrajectoryBudget::default();
+    let mut buf = [0u8; STREAM_FRAME_BYTES];
+    let (mut writer, _) =
+        StreamWriter::start(map.as_ref(), &mut buf).map_err(|e| anyhow::anyhow!("{e}"))?;
     for frame in frames {
         let frame = frame?;
         let points = frame.camera_points(LabelSource::Gt, stride);
-        map.integrate(&frame.pose, &points)
+        let mut bytes = 0u64;
+        let mut sink = |r: Record<'_>| {
+            bytes += writer.record(r, &mut buf).unwrap_or(0) as u64;
+            true
+        };
+        let report = map
+            .integrate_spilling(&frame.pose, &points, &mut sink)
             .map_err(|e| anyhow::anyhow!("{}: integrate: {e}", frame.id))?;
+        out.spilled_records += report.records_spilled as u64;
+        out.spill_bytes.push(bytes);
         out.frames += 1;
         out.peak_voxels = out.peak_voxels.max(map.len());
         out.peak_blocks = out.peak_blocks.max(map.block_count());
@@ -221,6 +249,43 @@ pub fn table(
             b.evicted_blocks,
             b.dropped,
             if fits { "yes" } else { "no (evicts)" }
+        );
+    }
+    s
+}
+
+/// The spill bandwidth of each trajectory: records and stream bytes per frame, and the
+/// bytes per second at `fps` frames per second against a UART of `baud` (8N1: 10 bits per
+/// byte).
+///
+/// ```
+/// use sndt_host::embedded::budget::{spill_table, TrajectoryBudget};
+/// let b = TrajectoryBudget { frames: 2, spill_bytes: vec![1000, 3000], ..Default::default() };
+/// let t = spill_table(&[("room".into(), b)], 10.0, 921_600);
+/// assert!(t.contains("| room | 0 | 2000 | 3000 | 20000 | 30000 | yes |"), "{t}");
+/// ```
+pub fn spill_table(rows: &[(String, TrajectoryBudget)], fps: f64, baud: u32) -> String {
+    let link = baud as f64 / 10.0;
+    let mut s = format!(
+        "\nspill to the host (every evicted record, COBS-framed with CRC) at {fps} frames/s, \
+         against a {baud}-baud UART ({link:.0} bytes/s):\n\n\
+         | trajectory | records | bytes/frame mean | bytes/frame max | bytes/s mean | bytes/s max | fits the UART |\n\
+         |---|---|---|---|---|---|---|\n"
+    );
+    for (name, b) in rows {
+        let (mean, max) = (b.mean_spill_bytes() * fps, b.max_spill_bytes() as f64 * fps);
+        let fits = if max <= link {
+            "yes"
+        } else if mean <= link {
+            "on average (buffer the peaks)"
+        } else {
+            "no"
+        };
+        s += &format!(
+            "| {name} | {} | {:.0} | {} | {mean:.0} | {max:.0} | {fits} |\n",
+            b.spilled_records,
+            b.mean_spill_bytes(),
+            b.max_spill_bytes()
         );
     }
     s

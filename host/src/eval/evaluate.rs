@@ -17,6 +17,7 @@ use crate::dataset::frame::{Frame, FrameId, LabelSource};
 use crate::dataset::ros::msgs::Time;
 use crate::dataset::source::{usable_frames, Dataset};
 use crate::eval::metrics::{Confusion, Metrics};
+use crate::global_map::{DeviceCapacity, GlobalMap, Spill, SpillStats, SpillingMap};
 use crate::output::ros::export::MapBag;
 use crate::output::ros::write::frame_time;
 use crate::semantic_map::{boxed_map, HostMap, SemanticMap};
@@ -53,6 +54,9 @@ pub struct EvalOptions {
     pub mcap_interval: Option<usize>,
     /// With `mcap`: the frame `/tf_static` attaches the map frame to.
     pub mcap_world: String,
+    /// Map with a device-capacity map spilling into a global map (`sndt map --device`)
+    /// instead of one host map, and which of its maps to score.
+    pub device: Option<(DeviceCapacity, Spill)>,
 }
 
 impl EvalOptions {
@@ -69,6 +73,7 @@ impl EvalOptions {
             mcap: None,
             mcap_interval: None,
             mcap_world: "world".into(),
+            device: None,
         }
     }
 }
@@ -90,6 +95,25 @@ pub struct TrajectoryResult {
     pub blocks: usize,
     /// Voxels evicted for lack of room.
     pub evicted: u64,
+    /// With a device map (`--device`): what spilling into the global map cost.
+    pub spill: Option<SpillSummary>,
+}
+
+/// A trajectory's spill from a device map into the global map.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SpillSummary {
+    /// Device capacity (voxels, blocks).
+    pub device: (usize, usize),
+    /// Records, dropped records and stream bytes per frame.
+    pub stats: SpillStats,
+    /// The global map's tier (0..=2) and bytes.
+    pub global_tier: usize,
+    /// Bytes of the global map (its tier's fixed size).
+    pub global_bytes: usize,
+    /// Voxels and blocks of the device map at the end.
+    pub device_voxels: usize,
+    /// Blocks of the device map at the end.
+    pub device_blocks: usize,
 }
 
 impl TrajectoryResult {
@@ -324,6 +348,14 @@ fn evaluate_trajectory(
     mut bag: Option<MapBag>,
     progress: &(dyn Fn() + Sync),
 ) -> Result<TrajectoryEvaluation> {
+    if let Some((capacity, readout)) = options.device {
+        if bag.is_some() || options.keep_maps {
+            bail!("--device maps cannot be written as bags or kept (use --save-maps)");
+        }
+        return crate::with_device!(capacity, M => {
+            evaluate_spilling::<M>(dataset, (name, ids), options, readout, progress)
+        });
+    }
     let mut map: Box<HostMap> = boxed_map(options.config).map_err(|e| anyhow!("config: {e}"))?;
     let mut input = Confusion::default();
     let mut kept = Vec::new();
@@ -380,11 +412,119 @@ fn evaluate_trajectory(
             voxels: map.len(),
             blocks: map.block_count(),
             evicted: stats.voxels_evicted,
+            spill: None,
         },
         kept,
         map: options.keep_maps.then_some(map),
         skipped: skipped.pop().map(|bad| bad.why),
     })
+}
+
+/// [`evaluate_trajectory`] with a device map spilling into a global map: the frames go into
+/// the device map, what it evicts into the global map; `readout` says which map is scored.
+/// `save_maps` writes the merged global map.
+fn evaluate_spilling<M: SpillingDevice>(
+    dataset: &dyn Dataset,
+    (name, ids): (&str, &[FrameId]),
+    options: &EvalOptions,
+    readout: Spill,
+    progress: &(dyn Fn() + Sync),
+) -> Result<TrajectoryEvaluation> {
+    let mut map = M::create(options.config)?;
+    let mut input = Confusion::default();
+    let mut kept = Vec::new();
+    let mut skipped = Vec::new();
+    let frames = usable_frames(dataset, ids, options.config.cell_size, &mut skipped);
+    let score = map_and_score(
+        &mut map,
+        frames.map(|frame| frame.map(Cow::Owned)),
+        options.labels,
+        options.stride,
+        &[readout],
+        |frame, _| {
+            score_input(&mut input, frame, options.labels);
+            progress();
+            Ok(())
+        },
+        |frame, rendered| {
+            if let Some(out) = &options.out {
+                write_backprojection(out, frame, rendered)?;
+            }
+            if options.keep_frames.contains(&frame.id) {
+                kept.push((frame.id.clone(), rendered.to_vec()));
+            }
+            progress();
+            Ok(())
+        },
+    )?;
+    let final_bytes = map.final_bytes();
+    let merged = map.merged_map()?;
+    if let Some(dir) = &options.save_maps {
+        let path = dir.join(format!("{}.sndt", name.replace('/', "_")));
+        crate::atomic::write_bytes(&path, merged.snapshot()?)?;
+    }
+    let (device_voxels, device_blocks, evicted) = map.device_counts();
+    let (voxels, blocks) = match readout {
+        Spill::Merged => (merged.len(), merged.block_count()),
+        Spill::DeviceOnly => (device_voxels, device_blocks),
+    };
+    let mut stats = map.spill_stats().clone();
+    stats.final_bytes += final_bytes;
+    let spill = SpillSummary {
+        device: M::CAPACITY,
+        stats,
+        global_tier: merged.tier(),
+        global_bytes: merged.memory_bytes(),
+        device_voxels,
+        device_blocks,
+    };
+    Ok(TrajectoryEvaluation {
+        confusion: score.confusions.into_iter().next().unwrap_or_default(),
+        input,
+        result: TrajectoryResult {
+            name: name.to_string(),
+            frames: score.update_ms.len(),
+            skipped: skipped.len(),
+            update_ms: score.update_ms,
+            voxels,
+            blocks,
+            evicted,
+            spill: Some(spill),
+        },
+        kept,
+        map: None,
+        skipped: skipped.pop().map(|bad| bad.why),
+    })
+}
+
+/// What [`evaluate_spilling`] needs of a [`SpillingMap`] of any device capacity.
+trait SpillingDevice: SemanticMap<Readout = Spill> + Sized {
+    const CAPACITY: (usize, usize);
+    fn create(config: Config) -> Result<Self>;
+    fn final_bytes(&mut self) -> u64;
+    fn merged_map(&self) -> Result<&GlobalMap>;
+    fn device_counts(&self) -> (usize, usize, u64);
+    fn spill_stats(&self) -> &SpillStats;
+}
+
+impl<const V: usize, const B: usize> SpillingDevice for SpillingMap<V, B> {
+    const CAPACITY: (usize, usize) = (V, B);
+    fn create(config: Config) -> Result<Self> {
+        SpillingMap::new(config)
+    }
+    fn final_bytes(&mut self) -> u64 {
+        self.final_stream_bytes()
+    }
+    fn merged_map(&self) -> Result<&GlobalMap> {
+        self.merged()
+    }
+    fn device_counts(&self) -> (usize, usize, u64) {
+        let d = self.device();
+        (d.len(), d.block_count(), d.stats().voxels_evicted)
+    }
+    fn spill_stats(&self) -> &SpillStats {
+        &self.stats
+    }
 }
 
 /// Scores the labels `source` feeds the map against the frame's ground truth, on the
