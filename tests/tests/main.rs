@@ -22,4 +22,5 @@ mod render;
 mod ros;
 mod scenes;
 mod snapshot;
+mod spill;
 mod synth;
