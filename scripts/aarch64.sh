@@ -6,6 +6,8 @@
 # The CRCs come from the C API's vector_crc program (targets/c/examples/vector_crc.c),
 # cross-compiled against libsndt_c.a for aarch64: it integrates the vector through the same
 # core code as the Rust test, and needs only sndt-core built for aarch64, not sndt-host.
+# The spill run's CRC (expected_spill_crc.txt: the firmware's evicted records merged into a
+# larger map) is checked by the core's own test tests/spill_vector.rs, which must pass here.
 # Installs what it needs when missing (idempotent; fast when everything is present).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -50,6 +52,12 @@ if [ -z "$doctests" ] || [ "$doctests" -eq 0 ]; then
     exit 1
 fi
 
+expected_spill=$(tr -d '[:space:]' <targets/cortex-m4f/vector/expected_spill_crc.txt)
+if ! grep -q '^test spill_run_matches_the_committed_crc \.\.\. ok$' "$log"; then
+    echo "error: the spill run's test (core/tests/spill_vector.rs) did not pass on $TARGET" >&2
+    exit 1
+fi
+
 step "cross-architecture CRCs on $TARGET: the C API's vector_crc under qemu-aarch64"
 # libsndt_c.a for aarch64 (release, as a C project links it), then the C program against it.
 C_DIR=targets/c
@@ -72,4 +80,4 @@ if [ "$render" != "$expected_render" ]; then
     exit 1
 fi
 awk '/^test result:/ { p += $4; f += $6 } END { printf "\naarch64: %d passed, %d failed\n", p, f }' "$log"
-echo "aarch64 (qemu-aarch64): snapshot CRC $crc = expected_crc.txt, render CRC $render = expected_render_crc.txt; took $((SECONDS - start)) s"
+echo "aarch64 (qemu-aarch64): snapshot CRC $crc = expected_crc.txt, render CRC $render = expected_render_crc.txt, spill CRC = expected_spill_crc.txt ($expected_spill, tests/spill_vector.rs); took $((SECONDS - start)) s"

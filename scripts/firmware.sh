@@ -4,10 +4,16 @@
 # integrates the committed test vector (targets/cortex-m4f/vector/), renders a 64x48 view of
 # the map and prints the snapshot CRC, the view's CRC and the peak stack; this script checks
 # both CRCs against the host's (`sndt testvector --check`, x86-64) and expected_crc.txt /
-# expected_render_crc.txt, and that static RAM + peak stack fit the RAM of memory.x. Exits
-# non-zero if anything fails, including the firmware's own checks and a panic call site
-# of sndt-core in the ELF (scripts/panic-sites.sh). Installs
-# what it needs when missing (idempotent; fast when everything is present).
+# expected_render_crc.txt, and that static RAM + peak stack fit the RAM of memory.x.
+# The firmware then runs the spill run: the same frames into the same static map at 9 cm
+# cells, which overflows it, every evicted voxel and block sent over UART0 as the core's
+# record stream (QEMU writes it to a file, -serial file:...). The host checks that stream
+# whole and merges it into a larger map (`sndt testvector --merge-stream`); its CRC must
+# equal the host's own spill run (`sndt testvector --spill`) and expected_spill_crc.txt, the
+# stream must be the bytes the host's run writes, and the device map's CRC the host's.
+# Exits non-zero if anything fails, including the firmware's own checks and a panic call
+# site of sndt-core in the ELF (scripts/panic-sites.sh). Installs what it needs when
+# missing (idempotent; fast when everything is present).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -67,16 +73,18 @@ bash scripts/panic-sites.sh "$ELF"
 step "run firmware under QEMU (mps2-an386, Cortex-M4F)"
 # -icount shift=0: one instruction per virtual nanosecond, so the firmware's SysTick
 # (25 MHz) counts exactly one tick per 40 instructions.
+# UART0 (the spill run's record stream) goes to a file, byte for byte.
 # pipefail: the status is QEMU's, i.e. the firmware's semihosting exit code (or timeout's 124).
-log="$(mktemp)"
-trap 'rm -f "$log"' EXIT
-timeout 60 qemu-system-arm -cpu cortex-m4 -machine mps2-an386 -nographic -monitor none \
-    -serial none -semihosting-config enable=on,target=native -icount shift=0 -kernel "$ELF" |
-    defmt-print -e "$ELF" | tee "$log"
+tmp="$(mktemp -d)"
+trap 'rm -rf "$tmp"' EXIT
+log="$tmp/firmware.log"
+uart="$tmp/uart.bin"
+timeout 120 qemu-system-arm -cpu cortex-m4 -machine mps2-an386 -nographic -monitor none \
+    -serial "file:$uart" -semihosting-config enable=on,target=native -icount shift=0 \
+    -kernel "$ELF" | defmt-print -e "$ELF" | tee "$log"
 
 step "cross-architecture CRCs: Cortex-M4F firmware vs host (x86-64) vs expected_*crc.txt"
-host_log="$(mktemp)"
-trap 'rm -f "$log" "$host_log"' EXIT
+host_log="$tmp/host.log"
 cargo run -q -p sndt-host --bin sndt -- testvector --check "$VECTOR" >"$host_log"
 # check_crc NAME FIRMWARE_TEXT HOST_LINE EXPECTED_FILE: the CRC after FIRMWARE_TEXT in the
 # firmware's output and the host's line "HOST_LINE 0x..." must both equal the committed file.
@@ -95,6 +103,43 @@ check_crc() {
 check_crc snapshot 'snapshot crc' 'crc' expected_crc.txt
 check_crc render 'render crc' 'render crc' expected_render_crc.txt
 
+step "spill run: the firmware's UART record stream merged on the host vs the host's own run"
+spill_log="$tmp/spill.log"
+stream_log="$tmp/stream.log"
+cargo run -q -p sndt-host --bin sndt -- testvector --spill "$VECTOR" | tee "$spill_log"
+echo
+cargo run -q -p sndt-host --bin sndt -- testvector --merge-stream "$uart" | tee "$stream_log"
+# last_hex FILE PATTERN: the 0x........ after PATTERN on the last line that has it.
+last_hex() { grep -oE "$2 0x[0-9a-f]{8}" "$1" | awk '{ print $NF }' | tail -n 1 || true; }
+fw_spill_bytes=$(grep -oE 'spill stream bytes [0-9]+' "$log" | awk '{ print $4 }' | tail -n 1 || true)
+uart_bytes=$(wc -c <"$uart")
+fw_device=$(last_hex "$log" 'device crc')
+stream_device=$(last_hex "$stream_log" 'device crc')
+host_device=$(last_hex "$spill_log" 'device crc')
+stream_crc=$(last_hex "$stream_log" 'stream crc')
+host_stream_crc=$(last_hex "$spill_log" 'stream crc')
+merged=$(last_hex "$stream_log" 'spill crc')
+own=$(last_hex "$spill_log" 'spill crc')
+expected_spill=$(tr -d '[:space:]' <"$FW_DIR/vector/expected_spill_crc.txt")
+printf '\nUART stream: %d bytes in %s (the firmware sent %s), stream crc %s (host run writes %s)\n' \
+    "$uart_bytes" "$(basename "$uart")" "${fw_spill_bytes:-none}" "${stream_crc:-none}" "${host_stream_crc:-none}"
+printf 'device map CRC: Cortex-M4F (QEMU) %s, stream end frame %s, host run %s\n' \
+    "${fw_device:-none}" "${stream_device:-none}" "${host_device:-none}"
+printf 'spill CRC: firmware stream merged on host %s, host own run %s, expected_spill_crc.txt %s\n' \
+    "${merged:-none}" "${own:-none}" "$expected_spill"
+if [ "$uart_bytes" != "${fw_spill_bytes:-}" ] || [ -z "$stream_crc" ] || [ "$stream_crc" != "$host_stream_crc" ]; then
+    echo "error: the UART stream is not the bytes the firmware reported and the host's run writes" >&2
+    exit 1
+fi
+if [ -z "$fw_device" ] || [ "$fw_device" != "$stream_device" ] || [ "$fw_device" != "$host_device" ]; then
+    echo "error: the device map's CRC differs between the firmware, its stream and the host" >&2
+    exit 1
+fi
+if [ -z "$merged" ] || [ "$merged" != "$own" ] || [ "$own" != "$expected_spill" ]; then
+    echo "error: spill CRCs differ (stream merged vs host run vs expected_spill_crc.txt)" >&2
+    exit 1
+fi
+
 step "memory report"
 peak=$(grep -oE 'peak stack [0-9]+' "$log" | awk '{ print $3 }' | tail -n 1 || true)
 if [ -z "$peak" ]; then
@@ -105,6 +150,7 @@ ticks=$(grep -oE 'systick per frame [0-9]+' "$log" | awk '{ print $4 }' | tail -
 printf 'flash:             %8d bytes (%d KiB of %d KiB)\n' "$flash" $(((flash + 1023) / 1024)) $((FLASH_BUDGET / 1024))
 printf 'static RAM:        %8d bytes\n' "$ram"
 printf 'peak stack:        %8d bytes (measured, paint-stack)\n' "$peak"
+grep -oE 'spill stream per frame.*' "$log" | tail -n 1 | sed 's/^/firmware: /' || true
 printf 'RAM + peak stack:  %8d bytes (%d KiB of %d KiB in memory.x)\n' $((ram + peak)) $(((ram + peak + 1023) / 1024)) $((RAM_BUDGET / 1024))
 if [ -n "$ticks" ]; then
     printf 'per frame:         %8d instructions (QEMU -icount: %d SysTick ticks x 40; 19,200 points of 160x120)\n' \

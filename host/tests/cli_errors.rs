@@ -607,3 +607,33 @@ fn an_experiment_skips_bad_frames_and_counts_them() {
     );
     assert!(!out.contains("Table"), "{out}");
 }
+
+#[test]
+fn testvector_merge_stream_refuses_a_broken_stream_and_names_the_file() {
+    let dir = temp_dir("merge-stream");
+    let file = dir.join("uart.bin");
+    let merge = |bytes: &[u8]| {
+        std::fs::write(&file, bytes).unwrap();
+        sndt_out(&["testvector", "--merge-stream", file.to_str().unwrap()])
+    };
+    let shown = file.display();
+    // A frame without its zero delimiter: the stream was cut.
+    let (code, _, err) = merge(b"\x05abcd");
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains(&format!(
+            "{shown}: record stream: cut off inside the frame at byte 0"
+        )),
+        "{err}"
+    );
+    // A delimited frame whose CRC is wrong.
+    let (code, _, err) = merge(b"\x05abcd\0");
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains(&format!("{shown}: record stream: frame 0 (byte 0): ")),
+        "{err}"
+    );
+    let (code, _, err) = merge(b"");
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("record stream: empty"), "{err}");
+}

@@ -6,12 +6,23 @@
 //! of the map from the last frame's pose (in bands of rows, into small stack buffers), and
 //! reports over defmt: per-frame SysTick ticks, voxels, blocks, evictions, the snapshot CRC
 //! (which must equal `vector/expected_crc.txt`, the host's CRC for the same frames), the
-//! view's label histogram and CRC (which must equal `vector/expected_render_crc.txt`), static
-//! RAM and the peak stack (cortex-m-rt `paint-stack`). Exit status 0 (semihosting) only when
-//! every check passes; a panic or HardFault exits non-zero.
+//! view's label histogram and CRC (which must equal `vector/expected_render_crc.txt`).
+//!
+//! Then the spill run (`spill.rs`): the same static map, reset to 9 cm cells, integrates
+//! the frames again and overflows; every voxel and block it evicts goes out over UART0
+//! (`uart.rs`, the board's CMSDK APB UART at 921,600 baud) as the core's record stream,
+//! followed by the map's last content and the end frame. It reports per frame the records
+//! spilled and dropped and the stream bytes, the totals, whether the stream fits the UART
+//! at 10 frames/s, and the device map's CRC; scripts/firmware.sh merges the stream on the
+//! host and checks it against `vector/expected_spill_crc.txt`.
+//!
+//! Last, static RAM and the peak stack (cortex-m-rt `paint-stack`). Exit status 0
+//! (semihosting) only when every check passes; a panic or HardFault exits non-zero.
 #![no_std]
 #![no_main]
 
+mod spill;
+mod uart;
 mod vector;
 
 use core::cell::RefCell;
@@ -70,10 +81,13 @@ fn main() -> ! {
             syst.set_reload(0x00ff_ffff);
             syst.clear_current();
             syst.enable_counter();
-            interrupt::free(|cs| match MAP.borrow(cs).try_borrow_mut() {
-                Ok(mut map) => run(&mut map, &mut syst).unwrap_or(false),
-                Err(_) => false,
-            })
+            let mut uart = uart::Uart::take(uart::BAUDDIV_921600);
+            interrupt::free(
+                |cs| match (MAP.borrow(cs).try_borrow_mut(), uart.as_mut()) {
+                    (Ok(mut map), Some(uart)) => run(&mut map, &mut syst, uart).unwrap_or(false),
+                    _ => false,
+                },
+            )
         }
         None => false,
     };
@@ -104,9 +118,9 @@ fn ticks_since(syst: &mut SYST, start: u32) -> Option<u32> {
 /// The vector is broken (or does not fit the firmware): the run stops at once and fails.
 struct Abort;
 
-/// Integrates the vector, casts its probes and checks the map's CRC: `Ok(true)` when every
-/// check passes.
-fn run(map: &mut FwMap, syst: &mut SYST) -> Result<bool, Abort> {
+/// Integrates the vector, casts its probes, checks the map's CRC and the view's, then
+/// runs the spill over `uart`: `Ok(true)` when every check passes.
+fn run(map: &mut FwMap, syst: &mut SYST, uart: &mut uart::Uart) -> Result<bool, Abort> {
     let v = load_vector(map)?;
     let frames_ok = integrate_frames(map, syst, &v)?;
     if cfg!(feature = "frames-only") {
@@ -115,7 +129,8 @@ fn run(map: &mut FwMap, syst: &mut SYST) -> Result<bool, Abort> {
     let probes_ok = check_probes(map, &v)?;
     let map_ok = check_map(map, &v)?;
     let view_ok = check_view(map, syst, &v)?;
-    Ok(frames_ok & probes_ok & map_ok & view_ok)
+    let spill_ok = spill::run(map, &v, uart)?;
+    Ok(frames_ok & probes_ok & map_ok & view_ok & spill_ok)
 }
 
 /// Parses the vector in flash and installs its cell size in the map.
@@ -151,6 +166,26 @@ fn frame_pose(f: &Frame<'_>) -> Option<Isometry3<f32>> {
     pose_from_matrix(&rot, &t).ok()
 }
 
+/// Frame `k`'s pose and its depth image with labels (borrowed from the vector in flash).
+fn frame_input<'a>(v: &Vector<'a>, k: usize) -> Result<(Isometry3<f32>, DepthImage<'a>), Abort> {
+    let f = v.frame(k).map_err(|e| {
+        defmt::error!("frame {=usize}: {}", k, e);
+        Abort
+    })?;
+    let Some(pose) = frame_pose(&f) else {
+        defmt::error!("frame {=usize}: invalid pose", k);
+        return Err(Abort);
+    };
+    let image = DepthImage {
+        camera: v.camera,
+        depth: Depth::Metres(f.depth),
+        kind: DepthKind::Planar,
+        labels: LabelImage::Top1(f.labels),
+        stride: 1,
+    };
+    Ok((pose, image))
+}
+
 /// How long one call took: SysTick ticks (`None` if the counter wrapped) and DWT cycles.
 struct Timing {
     ticks: Option<u32>,
@@ -174,21 +209,7 @@ fn integrate_frames(map: &mut FwMap, syst: &mut SYST, v: &Vector<'_>) -> Result<
     let (mut total_ticks, mut total_cycles) = (0u32, 0u32);
     let mut phases = [0u32; 5];
     for k in 0..v.frames {
-        let f = v.frame(k).map_err(|e| {
-            defmt::error!("frame {=usize}: {}", k, e);
-            Abort
-        })?;
-        let Some(pose) = frame_pose(&f) else {
-            defmt::error!("frame {=usize}: invalid pose", k);
-            return Err(Abort);
-        };
-        let image = DepthImage {
-            camera: v.camera,
-            depth: Depth::Metres(f.depth),
-            kind: DepthKind::Planar,
-            labels: LabelImage::Top1(f.labels),
-            stride: 1,
-        };
+        let (pose, image) = frame_input(v, k)?;
         let (result, time) = timed(syst, || integrate_observed(map, &pose, &image, &mut phases));
         total_cycles = total_cycles.saturating_add(time.cycles);
         match result {
