@@ -19,9 +19,10 @@ use crate::semantic_map::{
 };
 use anyhow::{anyhow, bail, Result};
 use sndt_core::{
-    Config, Error, Map, Record, RecordKind, SnapshotHeader, StreamEnd, StreamItem, StreamReader,
+    Config, Crc32, Error, Map, Record, SnapshotHeader, StreamEnd, StreamItem, StreamReader,
     StreamWriter, STREAM_FRAME_BYTES,
 };
+use std::fmt;
 use std::sync::{Mutex, OnceLock};
 
 /// The middle tier: 2^21 voxels, 2^19 blocks (~290 MiB).
@@ -204,71 +205,205 @@ impl GlobalMap {
     }
 }
 
-/// A record stream read whole and checked (framing, sequence, config, every record against
-/// the sender's config) before anything is merged.
-pub struct CheckedStream {
-    /// The sender's snapshot header (config, classes, capacities).
-    pub header: SnapshotHeader,
-    /// The records in stream order.
-    pub records: Vec<(RecordKind, Vec<u8>)>,
-    /// The end frame.
-    pub end: StreamEnd,
+/// Why a record stream was refused. Nothing is merged from a refused stream.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StreamError {
+    /// No frame at all.
+    Empty,
+    /// Frame `index` (at byte `offset`) is corrupt ([`sndt_core::Error::StreamChecksum`]),
+    /// out of order: missing, repeated or reordered ([`sndt_core::Error::StreamOrder`]), of
+    /// another config ([`sndt_core::Error::ConfigMismatch`]), or holds a record the
+    /// sender's config cannot hold ([`sndt_core::Error::RecordCorrupt`]).
+    Frame {
+        /// Frame number, from 0.
+        index: usize,
+        /// Byte offset of the frame in the stream.
+        offset: usize,
+        /// What is wrong with it.
+        error: sndt_core::Error,
+    },
+    /// The stream ends inside a frame (bytes after the last zero delimiter).
+    Unterminated {
+        /// Byte offset of the cut frame.
+        offset: usize,
+    },
+    /// The stream ends before its end frame.
+    Truncated {
+        /// Frames read.
+        frames: usize,
+    },
+    /// The sender's map has another class count than the global map.
+    Classes(u16),
+    /// The sender's config is not a valid config.
+    Config(sndt_core::Error),
+    /// The map merged into has no room for the stream's records.
+    MapFull {
+        /// The record that did not fit, from 0.
+        record: usize,
+    },
 }
 
-/// Reads a record stream (COBS frames ending in zero bytes, as `sndt_core::StreamWriter`
-/// writes them) and checks all of it: a corrupt, truncated, repeated or reordered frame, a
-/// record of another config, or a sender with other than 40 classes is an error naming the
-/// frame, and nothing is returned.
-pub fn read_stream(bytes: &[u8]) -> Result<CheckedStream> {
+impl fmt::Display for StreamError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StreamError::Empty => write!(f, "record stream: empty"),
+            StreamError::Frame {
+                index,
+                offset,
+                error,
+            } => write!(f, "record stream: frame {index} (byte {offset}): {error}"),
+            StreamError::Unterminated { offset } => write!(
+                f,
+                "record stream: cut off inside the frame at byte {offset} (no zero delimiter)"
+            ),
+            StreamError::Truncated { frames } => {
+                write!(f, "record stream: no end frame after {frames} frames")
+            }
+            StreamError::Classes(c) => write!(
+                f,
+                "record stream: the sender's map has {c} classes, the host's maps 40"
+            ),
+            StreamError::Config(e) => write!(f, "record stream: the sender's config: {e}"),
+            StreamError::MapFull { record } => {
+                write!(f, "record stream: record {record} does not fit the map")
+            }
+        }
+    }
+}
+
+impl std::error::Error for StreamError {}
+
+/// A stream [`check_stream`] accepted.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StreamSummary {
+    /// The sender's snapshot header (config, class count, capacities).
+    pub header: SnapshotHeader,
+    /// The end frame: the sender's frames, map checksum, records sent and dropped.
+    pub end: StreamEnd,
+    /// Bytes of the stream.
+    pub bytes: usize,
+    /// CRC-32 of the stream's bytes.
+    pub crc: u32,
+    /// Voxel records.
+    pub voxels: u32,
+    /// Block records.
+    pub blocks: u32,
+}
+
+/// The frames of a stream, each with its byte offset: the bytes between zero delimiters
+/// (empty ones skipped); `Err` if bytes follow the last delimiter.
+fn frames(bytes: &[u8]) -> Result<Vec<(usize, &[u8])>, StreamError> {
+    let mut out = Vec::new();
+    let mut offset = 0;
+    for piece in bytes.split_inclusive(|&b| b == 0) {
+        if piece.last() != Some(&0) {
+            return Err(StreamError::Unterminated { offset });
+        }
+        if piece.len() > 1 {
+            out.push((offset, piece));
+        }
+        offset += piece.len();
+    }
+    Ok(out)
+}
+
+/// Reads the whole stream and checks it, merging nothing: every frame as
+/// [`StreamReader`] does, every record against the sender's config as
+/// [`Map::merge_record`] would, and that the stream ends with its end frame.
+pub fn check_stream(bytes: &[u8]) -> Result<StreamSummary, StreamError> {
+    let frames = frames(bytes)?;
+    if frames.is_empty() {
+        return Err(StreamError::Empty);
+    }
     let mut reader = StreamReader::new();
     let mut scratch = [0u8; STREAM_FRAME_BYTES];
-    let mut records = Vec::new();
-    let mut check: Option<Box<Map<1, 1, 40>>> = None;
-    for (i, frame) in bytes
-        .split(|&b| b == 0)
-        .filter(|f| !f.is_empty())
-        .enumerate()
-    {
-        let at = |e: Error| anyhow!("record stream, frame {i}: {e}");
+    // Records are checked against a map of the sender's config (room is not checked).
+    let mut checker: Option<Map<1, 1, 40>> = None;
+    let (mut voxels, mut blocks) = (0, 0);
+    for (index, &(offset, frame)) in frames.iter().enumerate() {
+        let at = |error| StreamError::Frame {
+            index,
+            offset,
+            error,
+        };
         match reader.read(frame, &mut scratch).map_err(at)? {
             StreamItem::Start(h) => {
                 if h.classes != 40 {
-                    bail!("record stream of {} classes: the host maps 40", h.classes);
+                    return Err(StreamError::Classes(h.classes));
                 }
-                check = Some(Box::new(Map::try_new(h.config).map_err(at)?));
+                checker = Some(Map::try_new(h.config).map_err(StreamError::Config)?);
             }
             StreamItem::Record(r) => {
-                if let Some(c) = &check {
-                    c.check_record(r).map_err(at)?;
+                let map = checker.as_ref().ok_or(at(sndt_core::Error::StreamOrder))?;
+                map.check_record(r).map_err(at)?;
+                match r.kind {
+                    sndt_core::RecordKind::Voxel => voxels += 1,
+                    sndt_core::RecordKind::Block => blocks += 1,
                 }
-                records.push((r.kind, r.bytes.to_vec()));
             }
             StreamItem::End(_) => {}
         }
     }
-    let end = reader.finish().map_err(|e| anyhow!("record stream: {e}"))?;
+    let end = reader.finish().map_err(|_| StreamError::Truncated {
+        frames: frames.len(),
+    })?;
     let header = reader
         .header()
-        .ok_or_else(|| anyhow!("record stream: no start frame"))?;
-    Ok(CheckedStream {
+        .ok_or(StreamError::Truncated { frames: 0 })?;
+    let mut crc = Crc32::new();
+    crc.update(bytes);
+    Ok(StreamSummary {
         header,
-        records,
         end,
+        bytes: bytes.len(),
+        crc: crc.finish(),
+        voxels,
+        blocks,
     })
 }
 
+/// Merges the records of a stream [`check_stream`] accepted, in order, through `merge`
+/// (a map's `merge_record`); the caller adds the end frame's frame count.
+pub fn merge_checked(
+    bytes: &[u8],
+    mut merge: impl FnMut(Record<'_>) -> Result<(), Error>,
+) -> Result<(), StreamError> {
+    let mut reader = StreamReader::new();
+    let mut scratch = [0u8; STREAM_FRAME_BYTES];
+    let mut record = 0;
+    for (index, (offset, frame)) in frames(bytes)?.into_iter().enumerate() {
+        let item = reader
+            .read(frame, &mut scratch)
+            .map_err(|error| StreamError::Frame {
+                index,
+                offset,
+                error,
+            })?;
+        if let StreamItem::Record(r) = item {
+            merge(r).map_err(|_| StreamError::MapFull { record })?;
+            record += 1;
+        }
+    }
+    Ok(())
+}
+
 impl GlobalMap {
-    /// Merges a checked stream: its records in order, then its end's frame count. Refused
-    /// when the stream's config is not the map's.
-    pub fn merge_stream(&mut self, stream: &CheckedStream) -> Result<()> {
-        if stream.header.config != *self.config() {
-            bail!("merge: {}", Error::ConfigMismatch);
+    /// Checks a whole record stream ([`check_stream`]), then merges its records in order
+    /// and its end frame's frame count. Refused, with nothing merged, when the stream is
+    /// bad or its config is not the map's.
+    pub fn merge_stream(&mut self, bytes: &[u8]) -> Result<StreamSummary, StreamError> {
+        let summary = check_stream(bytes)?;
+        if summary.header.config != *self.config() {
+            return Err(StreamError::Frame {
+                index: 0,
+                offset: 0,
+                error: Error::ConfigMismatch,
+            });
         }
-        for (kind, bytes) in &stream.records {
-            self.merge_record(Record { kind: *kind, bytes })?;
-        }
-        self.add_frames(stream.end.frames);
-        Ok(())
+        // Only a map full at its largest tier fails here, after the records before it.
+        merge_checked(bytes, |r| self.merge_record(r).map_err(|_| Error::MapFull))?;
+        self.add_frames(summary.end.frames);
+        Ok(summary)
     }
 }
 

@@ -197,10 +197,13 @@ fn merge_command_merges_snapshots_and_streams() {
     // A stream cut before its end frame (at a frame boundary: cut inside a frame, the
     // partial frame fails its CRC).
     let cut = temp("cut.bin");
-    let last = stream[..stream.len() - 1].iter().rposition(|&b| b == 0).unwrap();
+    let last = stream[..stream.len() - 1]
+        .iter()
+        .rposition(|&b| b == 0)
+        .unwrap();
     std::fs::write(&cut, &stream[..=last]).unwrap();
     let err = run(vec![cut], &never).unwrap_err();
-    assert!(format!("{err:#}").contains("ended before"), "{err:#}");
+    assert!(format!("{err:#}").contains("no end frame"), "{err:#}");
     // Maps of different cell sizes do not merge.
     let mut other: Box<HostMap> = boxed_map(Config::with_cell_size(0.2)).unwrap();
     integrate_frame(

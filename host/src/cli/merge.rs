@@ -1,6 +1,6 @@
 //! `sndt merge`: merges saved maps and record streams into one map.
 
-use crate::global_map::{read_stream, GlobalMap};
+use crate::global_map::{check_stream, GlobalMap};
 use anyhow::{bail, Context, Result};
 use std::path::PathBuf;
 
@@ -41,11 +41,12 @@ pub fn run(a: &MergeArgs) -> Result<()> {
                 Some(m) => m.merge_global(&map).map_err(what)?,
             }
         } else {
-            let stream = read_stream(&bytes).map_err(what)?;
+            let stream = check_stream(&bytes).map_err(|e| what(e.into()))?;
             println!(
-                "{}: record stream of {} records, {} frames (sender's map CRC 0x{:08x}, {} records dropped)",
+                "{}: record stream of {} voxel and {} block records, {} frames (sender's map CRC 0x{:08x}, {} records dropped)",
                 path.display(),
-                stream.records.len(),
+                stream.voxels,
+                stream.blocks,
                 stream.end.frames,
                 stream.end.checksum,
                 stream.end.dropped
@@ -54,7 +55,7 @@ pub fn run(a: &MergeArgs) -> Result<()> {
                 merged = Some(GlobalMap::new(stream.header.config).map_err(what)?);
             }
             if let Some(m) = merged.as_mut() {
-                m.merge_stream(&stream).map_err(what)?;
+                m.merge_stream(&bytes).map_err(|e| what(e.into()))?;
             }
         }
     }
