@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Coverage-guided fuzzing of the map and the dataset readers (docs/FUZZING.md).
+# Coverage-guided fuzzing of the map, its record stream and the dataset readers
+# (docs/FUZZING.md).
 #
 #   bash scripts/fuzz.sh --smoke             fmt + clippy of fuzz/, then every target over its
 #                                            corpus and a bounded number of new runs (CI)
@@ -17,9 +18,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-TARGETS=(snapshot integrate png json npy hdf5 mcap)
+TARGETS=(snapshot integrate record_stream png json npy hdf5 mcap)
 # Smoke: new runs per target after the corpus, and a time cap per target (seconds) so a
-# slow machine still finishes the seven targets in about a minute.
+# slow machine still finishes the eight targets in about a minute.
 SMOKE_RUNS=${SMOKE_RUNS:-20000}
 SMOKE_SECONDS=${SMOKE_SECONDS:-7}
 TRIPLE=$(rustc -vV | sed -n 's/^host: //p')
@@ -86,7 +87,7 @@ summarize() {
     artifact=$(sed -n 's/.*Test unit written to //p' "$log" | tail -1)
     local crashes=0
     if [ "$rc" -ne 0 ] || [ -n "$artifact" ]; then crashes=1; fi
-    printf 'fuzz %-9s runs %-9s crashes %s  cov %-6s ft %-6s %ss\n' \
+    printf 'fuzz %-13s runs %-9s crashes %s  cov %-6s ft %-6s %ss\n' \
         "$target" "${runs:-?}" "$crashes" "${cov:-?}" "${ft:-?}" "$secs"
     if [ "$crashes" -ne 0 ]; then
         echo "  crash in $target (exit $rc); log: $log"
@@ -146,7 +147,7 @@ case "${1:-}" in
     build
     "$BIN/$2" -merge=1 "fuzz/corpus/$2" "$TARGET_DIR/found/$2"
     ;;
-"" | -h | --help) sed -n '2,18p' "$0" ;;
+"" | -h | --help) sed -n '2,17p' "$0" ;;
 *)
     known "$1"
     build

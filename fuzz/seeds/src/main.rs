@@ -1,5 +1,5 @@
-//! Writes raw seed inputs for the fuzz targets into `<out>/<target>/`: snapshots the core
-//! writes for a few small maps, and PNG, JSON, `.npy`, HDF5 and MCAP files the host's own
+//! Writes raw seed inputs for the fuzz targets into `<out>/<target>/`: snapshots and record
+//! streams the core writes for a few small maps, and PNG, JSON, `.npy`, HDF5 and MCAP files the host's own
 //! writers produce for small frames. `scripts/fuzz.sh --seeds` runs this and then merges
 //! the result into `fuzz/corpus/` with libFuzzer's `-merge=1`, which keeps only inputs
 //! that add coverage.
@@ -8,8 +8,8 @@
 
 use anyhow::{bail, Context, Result};
 use sndt_core::{
-    Config, Depth, DepthImage, DepthKind, Isometry3, LabelImage, Map, MissModel, Pinhole,
-    Translation3, UnitQuaternion, Vector3,
+    Config, Depth, DepthImage, DepthKind, Isometry3, LabelImage, Map, MissModel, Pinhole, Record,
+    RecordSink, StreamWriter, Translation3, UnitQuaternion, Vector3, STREAM_FRAME_BYTES,
 };
 use sndt_host::dataset::prepared::{write_frame, write_split_list};
 use sndt_host::dataset::{Frame, FrameId, Rays, TopK};
@@ -24,6 +24,7 @@ fn main() -> Result<()> {
         bail!("{}: exists; give a new directory", out.display());
     }
     snapshots(&out.join("snapshot"))?;
+    record_streams(&out.join("record_stream"))?;
     integrate(&out.join("integrate"))?;
     prepared(&out)?;
     hdf5(&out.join("hdf5"))?;
@@ -61,23 +62,31 @@ fn pose(x: f32, yaw: f32) -> Isometry3<f32> {
     )
 }
 
+/// The `k`-th view of the wall (planar and range depth alternate).
+fn view<'a>(k: usize, depth: &'a [f32], labels: &'a [u8]) -> DepthImage<'a> {
+    DepthImage {
+        camera: camera(),
+        depth: Depth::Metres(depth),
+        kind: if k.is_multiple_of(2) {
+            DepthKind::Planar
+        } else {
+            DepthKind::Range
+        },
+        labels: LabelImage::Top1(labels),
+        stride: 1,
+    }
+}
+
+fn view_pose(k: usize) -> Isometry3<f32> {
+    pose(0.1 * k as f32, 0.2 * k as f32)
+}
+
 /// Integrates `frames` views of the wall and writes the snapshot.
 fn map_snapshot<const C: usize>(config: Config, frames: usize) -> Result<Vec<u8>> {
     let mut map: Box<Map<256, 128, C>> = Box::new(Map::new(config));
     let (depth, labels) = wall(C as u8);
     for k in 0..frames {
-        let image = DepthImage {
-            camera: camera(),
-            depth: Depth::Metres(&depth),
-            kind: if k % 2 == 0 {
-                DepthKind::Planar
-            } else {
-                DepthKind::Range
-            },
-            labels: LabelImage::Top1(&labels),
-            stride: 1,
-        };
-        map.integrate_depth(&pose(0.1 * k as f32, 0.2 * k as f32), &image)
+        map.integrate_depth(&view_pose(k), &view(k, &depth, &labels))
             .map_err(|e| anyhow::anyhow!("integrate: {e:?}"))?;
     }
     let mut buf = vec![0u8; map.snapshot_len()];
@@ -101,6 +110,154 @@ fn snapshots(dir: &Path) -> Result<()> {
     put(dir, "wall-c40", &map_snapshot::<40>(Config::DEFAULT, 2)?)?;
     put(dir, "coarse-c4", &map_snapshot::<4>(coarse, 3)?)?;
     put(dir, "decayed-c4", &map_snapshot::<4>(decaying, 4)?)
+}
+
+/// A record stream as it goes over the link: the start frame for a map's config, any
+/// records sent, then (`finish`) the map's records and the end frame.
+struct Link {
+    bytes: Vec<u8>,
+    writer: StreamWriter,
+}
+
+impl Link {
+    fn start<const V: usize, const B: usize, const C: usize>(map: &Map<V, B, C>) -> Result<Link> {
+        let mut buf = [0u8; STREAM_FRAME_BYTES];
+        let (writer, n) =
+            StreamWriter::start(map, &mut buf).map_err(|e| anyhow::anyhow!("start: {e:?}"))?;
+        Ok(Link {
+            bytes: buf[..n].to_vec(),
+            writer,
+        })
+    }
+
+    /// Sends a record; `false` (refused) if it does not fit a frame.
+    fn send(&mut self, r: Record<'_>) -> bool {
+        let mut buf = [0u8; STREAM_FRAME_BYTES];
+        match self.writer.record(r, &mut buf) {
+            Ok(n) => {
+                self.bytes.extend_from_slice(&buf[..n]);
+                true
+            }
+            Err(_) => false,
+        }
+    }
+
+    /// Sends every record of `map`, then the end frame; the fuzz input: `flags`, the link.
+    fn finish<const V: usize, const B: usize, const C: usize>(
+        mut self,
+        map: &Map<V, B, C>,
+        dropped: u32,
+        flags: u8,
+    ) -> Result<Vec<u8>> {
+        let sent = map.write_records(&mut |r: Record<'_>| self.send(r));
+        if sent.refused != 0 {
+            bail!("{} records refused by the stream writer", sent.refused);
+        }
+        let mut buf = [0u8; STREAM_FRAME_BYTES];
+        let n = self
+            .writer
+            .end(map, dropped, &mut buf)
+            .map_err(|e| anyhow::anyhow!("end: {e:?}"))?;
+        self.bytes.extend_from_slice(&buf[..n]);
+        let mut input = vec![flags];
+        input.extend(self.bytes);
+        Ok(input)
+    }
+}
+
+/// A 4x3 camera looking at a wall 0.8 m away, from `x` metres along the wall: a view small
+/// enough that a record stream of a few of them stays a few KiB (libFuzzer's inputs grow
+/// to the largest seed, and the target's cost to the records times the map's size).
+fn near_view(k: usize, classes: u8) -> (Isometry3<f32>, Vec<f32>, Vec<u8>) {
+    let depth = (0..12).map(|i| 0.8 + 0.01 * i as f32).collect();
+    let labels = (0..12)
+        .map(|i| 1 + ((i + k) % classes as usize) as u8)
+        .collect();
+    (pose(0.15 * k as f32, 0.1 * k as f32), depth, labels)
+}
+
+fn near_camera() -> Pinhole {
+    Pinhole {
+        fx: 4.0,
+        fy: 4.0,
+        cx: 2.0,
+        cy: 1.5,
+        width: 4,
+        height: 3,
+    }
+}
+
+/// Integrates near views `0..frames` into `map`, handing evicted records to `sink`.
+fn near_views<const V: usize, const B: usize, const C: usize>(
+    map: &mut Map<V, B, C>,
+    frames: usize,
+    sink: &mut dyn RecordSink,
+) -> Result<(u32, u32)> {
+    let (mut spilled, mut dropped) = (0, 0);
+    for k in 0..frames {
+        let (pose, depth, labels) = near_view(k, C as u8);
+        let image = DepthImage {
+            camera: near_camera(),
+            ..view(k, &depth, &labels)
+        };
+        let report = map
+            .integrate_depth_spilling(&pose, &image, sink)
+            .map_err(|e| anyhow::anyhow!("integrate: {e:?}"))?;
+        spilled += report.records_spilled;
+        dropped += report.records_dropped;
+    }
+    Ok((spilled, dropped))
+}
+
+/// A map of `frames` near views, sent whole as a record stream.
+fn map_stream<const C: usize>(config: Config, frames: usize, flags: u8) -> Result<Vec<u8>> {
+    let mut map: Box<Map<256, 128, C>> = Box::new(Map::new(config));
+    near_views(&mut *map, frames, &mut |_: Record<'_>| true)?;
+    Link::start(&*map)?.finish(&*map, 0, flags)
+}
+
+/// A device-sized map (8 voxels, 4 blocks) that evicts while it integrates six near views:
+/// the records it spills go on the link as they come (every third refused when `refuse`,
+/// and counted as dropped), then its last map's records, so the receiver merges voxels and
+/// blocks it already holds.
+fn spilled_stream(refuse: bool, flags: u8) -> Result<Vec<u8>> {
+    let mut map: Box<Map<8, 4, 4>> = Box::new(Map::new(Config::DEFAULT));
+    let mut link = Link::start(&*map)?;
+    let mut offered = 0u32;
+    let (spilled, dropped) = near_views(&mut *map, 6, &mut |r: Record<'_>| {
+        offered += 1;
+        !(refuse && offered.is_multiple_of(3)) && link.send(r)
+    })?;
+    if spilled == 0 || refuse != (dropped > 0) {
+        bail!("spilled stream: {spilled} records spilled, {dropped} dropped");
+    }
+    link.finish(&*map, dropped, flags)
+}
+
+/// Record streams (a flags byte, then the link bytes; see the target): whole maps of 1, 4
+/// and 40 classes, of other configs, empty, one larger than the target's receiving map
+/// (`wide`), and a small map's spilled records, with no repairs (flags 0) and with all of
+/// them (flags 7).
+fn record_streams(dir: &Path) -> Result<()> {
+    let mut coarse = Config::with_cell_size(0.25);
+    coarse.quant_bits = 3;
+    coarse.miss_model = MissModel::Constant;
+    let mut decaying = Config::DEFAULT;
+    decaying.n_max = 4;
+    decaying.top_k = 3;
+    for flags in [0u8, 7] {
+        let put = |name: &str, bytes: &[u8]| put(dir, &format!("{name}-flags{flags}"), bytes);
+        put("empty-c4", &map_stream::<4>(Config::DEFAULT, 0, flags)?)?;
+        put("near-c1", &map_stream::<1>(Config::DEFAULT, 1, flags)?)?;
+        put("near-c4", &map_stream::<4>(Config::DEFAULT, 2, flags)?)?;
+        put("near-c40", &map_stream::<40>(Config::DEFAULT, 2, flags)?)?;
+        put("coarse-c4", &map_stream::<4>(coarse, 3, flags)?)?;
+        put("decayed-c4", &map_stream::<4>(decaying, 2, flags)?)?;
+        put("wide-c1", &map_stream::<1>(Config::DEFAULT, 6, flags)?)?;
+        put("spilled-c4", &spilled_stream(false, flags)?)?;
+        put("spilled-dropped-c4", &spilled_stream(true, flags)?)?;
+    }
+    Ok(())
 }
 
 /// Structured-input seeds: bytes from a fixed linear congruential generator.

@@ -337,6 +337,17 @@ typedef struct sndt_frame_report {
    * Occupancy blocks evicted to make room.
    */
   uint32_t blocks_evicted;
+  /**
+   * Records of evicted voxels and blocks handed to a record sink. Always 0 here: this
+   * API integrates without a sink (evictions are counted in voxels_evicted and
+   * blocks_evicted only).
+   */
+  uint32_t records_spilled;
+  /**
+   * Records of evicted voxels and blocks a record sink refused (lost). Always 0 here, as
+   * records_spilled.
+   */
+  uint32_t records_dropped;
 } sndt_frame_report;
 
 /**

@@ -172,12 +172,14 @@ fn frame_report_mirrors_the_core_field_by_field() {
         blocks_created: 11,
         voxels_evicted: 12,
         blocks_evicted: 13,
+        records_spilled: 14,
+        records_dropped: 15,
     };
     let core = debug_fields(&format!("{r:?}"));
     let c = debug_fields(&format!("{:?}", sndt_frame_report::from(r)));
     assert_eq!(c, core);
     let values: Vec<&str> = core.iter().map(|(_, v)| v.as_str()).collect();
-    let expected: Vec<String> = (1..=13).map(|i: u32| i.to_string()).collect();
+    let expected: Vec<String> = (1..=15).map(|i: u32| i.to_string()).collect();
     assert_eq!(
         values, expected,
         "a FrameReport field is missing from this test"

@@ -320,6 +320,13 @@ pub struct sndt_frame_report {
     pub voxels_evicted: u32,
     /// Occupancy blocks evicted to make room.
     pub blocks_evicted: u32,
+    /// Records of evicted voxels and blocks handed to a record sink. Always 0 here: this
+    /// API integrates without a sink (evictions are counted in voxels_evicted and
+    /// blocks_evicted only).
+    pub records_spilled: u32,
+    /// Records of evicted voxels and blocks a record sink refused (lost). Always 0 here, as
+    /// records_spilled.
+    pub records_dropped: u32,
 }
 
 impl From<FrameReport> for sndt_frame_report {
@@ -338,6 +345,8 @@ impl From<FrameReport> for sndt_frame_report {
             blocks_created: r.blocks_created,
             voxels_evicted: r.voxels_evicted,
             blocks_evicted: r.blocks_evicted,
+            records_spilled: r.records_spilled,
+            records_dropped: r.records_dropped,
         }
     }
 }
