@@ -250,7 +250,19 @@ impl StreamReader {
     }
 
     /// Decodes one frame (COBS bytes, with or without its zero delimiter) into `scratch`
-    /// and checks it. Errors leave the reader where it was.
+    /// and checks it. Errors leave the reader where it was:
+    ///
+    /// - [`Error::StreamChecksum`]: not COBS, too long, or a CRC mismatch;
+    /// - [`Error::StreamOrder`]: not the next sequence number, a record before the start,
+    ///   anything after the end, an unknown kind, an end whose record count disagrees;
+    /// - [`Error::ConfigMismatch`]: a record or end with another config tag;
+    /// - [`Error::RecordCorrupt`]: a record of the wrong length for its kind and the
+    ///   sender's class count;
+    /// - a start whose header does not decode: the error of [`SnapshotHeader::read`].
+    ///
+    /// The start's config and class count are returned as sent: whether the receiver can
+    /// use them ([`Config::validate`](crate::Config::validate), its own `C`) is its
+    /// check, as the host's `check_stream` does.
     pub fn read<'s>(
         &mut self,
         frame: &[u8],
