@@ -18,8 +18,8 @@ use std::path::PathBuf;
   sndt budget synthetic:floor --capacity 4096 --blocks 512 --fps 10")]
 pub struct BudgetArgs {
     /// Dataset whose trajectories to simulate at this capacity: a directory (prepared
-    /// layout or raw Hypersim), a ROS 2 bag (`.mcap`) or `synthetic[:SCENES:FRAMES]`
-    /// (rendered on the fly).
+    /// layout or raw Hypersim), a ROS 2 bag (`.mcap`), `synthetic[:SCENES:FRAMES]` or
+    /// `synthetic:floor[:WALK[:FRAMES]]` (rendered on the fly).
     pub dataset: Option<PathBuf>,
     /// Voxel edge in metres.
     #[arg(long, default_value_t = 0.10, value_parser = super::parse::positive)]

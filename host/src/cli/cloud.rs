@@ -12,8 +12,9 @@ use std::path::{Path, PathBuf};
 #[command(after_help = "Example:
   sndt cloud data/synth --frame synth_00_living/cam_00/0000 --out out/frame.ply")]
 pub struct CloudArgs {
-    /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`) or
-    /// `synthetic[:SCENES:FRAMES]` (rendered on the fly).
+    /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`),
+    /// `synthetic[:SCENES:FRAMES]` or `synthetic:floor[:WALK[:FRAMES]]` (rendered on the
+    /// fly).
     pub dataset: PathBuf,
     /// The frame, as `<scene>/<cam>/<NNNN>`.
     #[arg(long)]

@@ -19,8 +19,9 @@ use std::fmt;
 #[command(after_help = "Example:
   sndt compare synthetic --cell 0.05,0.1 --frames 0..20")]
 pub struct CompareArgs {
-    /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`) or
-    /// `synthetic[:SCENES:FRAMES]` (rendered on the fly); `synthetic` alone is its first scene.
+    /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`),
+    /// `synthetic[:SCENES:FRAMES]` or `synthetic:floor[:WALK[:FRAMES]]` (rendered on the
+    /// fly); `synthetic` alone is its first scene.
     pub dataset: String,
     /// Voxel edges in metres, comma separated: the comparison is made at each.
     #[arg(long, value_delimiter = ',', default_value = "0.1", value_parser = super::parse::positive)]

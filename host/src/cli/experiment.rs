@@ -68,7 +68,8 @@ impl From<MethodArg> for Method {
     after_help = "Example:\n  sndt experiment synthetic --every 2 --cell 0.05,0.1 --out out/experiment"
 )]
 pub struct ExperimentArgs {
-    /// Dataset directory (prepared layout or raw Hypersim), or `synthetic[:SCENES:FRAMES]`.
+    /// Dataset directory (prepared layout or raw Hypersim), `synthetic[:SCENES:FRAMES]` or
+    /// `synthetic:floor[:WALK[:FRAMES]]`.
     pub dataset: String,
     /// Labels fed to the maps.
     #[arg(long, value_enum, default_value = "both")]

@@ -19,8 +19,9 @@ use std::path::PathBuf;
 #[command(after_help = "Example:
   sndt points data/synth --frames 0..12 --out out/points.bin")]
 pub struct PointsArgs {
-    /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`) or
-    /// `synthetic[:SCENES:FRAMES]` (rendered on the fly).
+    /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`),
+    /// `synthetic[:SCENES:FRAMES]` or `synthetic:floor[:WALK[:FRAMES]]` (rendered on the
+    /// fly).
     pub dataset: String,
     /// Output file (`SNDTPTS1` format).
     #[arg(long)]

@@ -1,22 +1,33 @@
 //! `sndt synth`: a synthetic labelled split written in the prepared layout (no download),
-//! with its class histogram, preview pictures and the raw prediction's score.
+//! with its class histogram, preview pictures and the raw prediction's score: separate
+//! rooms, or a walk through the building floor.
 
 use crate::cli::parse::renamed;
 use crate::dataset::classes::{render_color, NYU40};
 use crate::dataset::source::Dataset;
-use crate::dataset::synthetic::{write_split, DepthNoise, SynthOptions, Synthetic};
+use crate::dataset::synthetic::{floor, write_split, DepthNoise, SynthOptions, Synthetic};
 use crate::eval::label_stats::LabelStats;
 use crate::output::picture;
 use crate::output::progress::progress;
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::Instant;
 
+/// What `sndt synth` generates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum SceneArg {
+    /// Separate rooms, one trajectory each (`--scenes`).
+    Rooms,
+    /// One walk through a building floor: eleven rooms along a corridor (`--walk`).
+    Floor,
+}
+
 /// Arguments of `sndt synth`.
 #[derive(clap::Args, Clone, Debug)]
-#[command(after_help = "Example:
-  sndt synth --out data/synth --scenes 2 --frames-per-scene 20 --no-predictions")]
+#[command(after_help = "Examples:
+  sndt synth --out data/synth --scenes 2 --frames-per-scene 20 --no-predictions
+  sndt synth --out data/floor --scene floor --walk 2 --frames-per-scene 200")]
 pub struct SynthArgs {
     /// Output directory (the dataset root) of the prepared layout.
     #[arg(long, required_unless_present = "mcap")]
@@ -26,15 +37,27 @@ pub struct SynthArgs {
     /// /tf and /tf_static).
     #[arg(long)]
     pub mcap: Option<PathBuf>,
-    /// Number of scenes (kinds cycle: living, bedroom, kitchen, office, bathroom, open plan).
-    #[arg(long, default_value_t = 6)]
-    pub scenes: usize,
+    /// What to generate: separate rooms, or a walk through the building floor (scene
+    /// `synth_floor`, trajectory `cam_NN` of walk NN + 1).
+    #[arg(long, value_enum, default_value = "rooms")]
+    pub scene: SceneArg,
+    /// Number of rooms with `--scene rooms` (kinds cycle: living, bedroom, kitchen, office,
+    /// bathroom, open plan) [default: 6].
+    #[arg(long)]
+    pub scenes: Option<usize>,
+    /// Which walk through the floor with `--scene floor`: 1, 2, ... (odd walks go from the
+    /// west end of the corridor to the east, even walks back; each picks its own
+    /// standpoints and views) [default: 1].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub walk: Option<u32>,
     /// Seed of everything.
     #[arg(long, default_value_t = crate::dataset::synthetic::DEFAULT_SEED)]
     pub seed: u64,
-    /// Frames of each scene's camera trajectory (one trajectory per scene).
-    #[arg(long, value_name = "N", default_value_t = 100)]
-    pub frames_per_scene: usize,
+    /// Frames of each scene's camera trajectory (one trajectory per scene); with `--scene
+    /// floor`, frames the walk is sampled at (1000: about 9 per second; fewer: the same
+    /// walk at a lower frame rate) [default: 100, with --scene floor 1000].
+    #[arg(long, value_name = "N")]
+    pub frames_per_scene: Option<usize>,
     /// Deprecated spelling of --frames-per-scene.
     #[arg(long, hide = true, conflicts_with = "frames_per_scene")]
     pub frames: Option<usize>,
@@ -52,16 +75,27 @@ pub fn run(a: &SynthArgs) -> Result<()> {
     let t = Instant::now();
     let per_scene = renamed(
         a.frames_per_scene,
-        a.frames,
+        a.frames.map(Some),
         "--frames",
         "--frames-per-scene",
     );
+    let floor_walk = match a.scene {
+        SceneArg::Rooms if a.walk.is_some() => bail!("--walk: only with --scene floor"),
+        SceneArg::Rooms => None,
+        SceneArg::Floor if a.scenes.is_some() => bail!("--scenes: only with --scene rooms"),
+        SceneArg::Floor => Some(a.walk.unwrap_or(1)),
+    };
+    let default_frames = match floor_walk {
+        Some(_) => floor::DEFAULT_FRAMES,
+        None => SynthOptions::default().frames,
+    };
     let options = SynthOptions {
-        scenes: a.scenes,
-        frames: per_scene,
+        scenes: a.scenes.unwrap_or(SynthOptions::default().scenes),
+        frames: per_scene.unwrap_or(default_frames),
         seed: a.seed,
         noise: a.noise.then_some(DepthNoise::KINECT),
         predictions: !a.no_predictions,
+        floor: floor_walk,
         ..SynthOptions::default()
     };
     let split = Synthetic::new(options)?;
@@ -72,7 +106,7 @@ pub fn run(a: &SynthArgs) -> Result<()> {
         return Ok(());
     };
     println!("sndt synth: {} -> {}", split.describe(), out.display());
-    let bar = progress((a.scenes * per_scene) as u64, "synth");
+    let bar = progress(split.frames().len() as u64, "synth");
     // Per-frame statistics are summed outside the lock; only the merge is serialised.
     let stats = Mutex::new(LabelStats::default());
     let frames = write_split(out, &split, &|f| {
@@ -168,4 +202,63 @@ fn write_previews(split: &Synthetic, dir: &Path) -> Result<()> {
         dir.display()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cli::{Cli, Command};
+    use clap::Parser;
+
+    fn args(line: &str) -> SynthArgs {
+        match Cli::try_parse_from(line.split_whitespace())
+            .unwrap()
+            .command
+        {
+            Command::Synth(a) => a,
+            _ => unreachable!("a synth command line"),
+        }
+    }
+
+    #[test]
+    fn synth_writes_a_walk_of_the_floor() {
+        let out = std::env::temp_dir().join(format!("sndt-synth-floor-{}", std::process::id()));
+        let line = format!(
+            "sndt synth --out {} --scene floor --walk 2 --frames-per-scene 2 --no-predictions",
+            out.display()
+        );
+        run(&args(&line)).unwrap();
+        let written = crate::dataset::open_spec(out.to_str().unwrap(), &Default::default());
+        let ids: Vec<String> = written
+            .unwrap()
+            .frames()
+            .iter()
+            .map(ToString::to_string)
+            .collect();
+        std::fs::remove_dir_all(&out).unwrap();
+        assert_eq!(ids, ["synth_floor/cam_01/0000", "synth_floor/cam_01/0001"]);
+    }
+
+    #[test]
+    fn synth_walk_and_scenes_go_with_their_scene_only() {
+        let a = args("sndt synth --out x --walk 2");
+        assert_eq!(
+            format!("{}", run(&a).unwrap_err()),
+            "--walk: only with --scene floor"
+        );
+        let a = args("sndt synth --out x --scene floor --scenes 2");
+        assert_eq!(
+            format!("{}", run(&a).unwrap_err()),
+            "--scenes: only with --scene rooms"
+        );
+        assert!(Cli::try_parse_from([
+            "sndt", "synth", "--out", "x", "--scene", "floor", "--walk", "0"
+        ])
+        .is_err());
+        let a = args("sndt synth --out x");
+        assert_eq!(
+            (a.scene, a.scenes, a.walk, a.frames_per_scene),
+            (SceneArg::Rooms, None, None, None)
+        );
+    }
 }

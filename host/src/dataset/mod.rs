@@ -3,7 +3,8 @@
 //! - [`frame`]: [`Frame`] (pose, rays, depth, labels, predictions) and [`FrameId`];
 //! - [`source`]: the [`Dataset`] trait, [`Every`] (every k-th frame of another dataset)
 //!   and the [`OpenOptions`] readers take;
-//! - [`open`](open::open): detects a directory's layout, or renders `synthetic[:S:F]`;
+//! - [`open`](open::open): detects a directory's layout, or renders `synthetic[:S:F]`
+//!   (`synthetic:floor[:W[:F]]`);
 //! - readers: [`synthetic`] (our scenes, rendered on the fly), [`prepared`] (the prepared
 //!   layout, ours and the authors' v0.3.1), [`hypersim`] (raw Hypersim HDF5), [`npy`]
 //!   (ESANet top-k predictions beside any of them), [`ros`] (ROS 2 bags);

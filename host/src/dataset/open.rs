@@ -1,27 +1,54 @@
 //! Opening a dataset: the layout is detected from the directory, or `synthetic[:S:F]`
-//! renders the synthetic split on the fly.
+//! renders the synthetic split on the fly (`synthetic:floor[:WALK[:FRAMES]]`: a walk of
+//! the synthetic building floor).
 
 use super::source::{Dataset, OpenOptions};
 use anyhow::{bail, Context, Result};
 use std::path::Path;
 
-/// Opens `spec`: the word `synthetic` for the default synthetic split rendered on the
-/// fly (no files; `synthetic:SCENES:FRAMES` for a smaller one), else a dataset
-/// directory (see [`open`]).
+/// Opens `spec`, else a dataset directory (see [`open`]). Rendered on the fly, no files:
+///
+/// - `synthetic`: the default synthetic split (six rooms, 100 frames each);
+/// - `synthetic:SCENES:FRAMES`: `SCENES` rooms of `FRAMES` frames each;
+/// - `synthetic:floor`: walk 1 of the building floor
+///   ([`floor`](super::synthetic::floor)), 1,000 frames, scene `synth_floor`,
+///   trajectory `cam_00`;
+/// - `synthetic:floor:WALK`: walk `WALK` (1, 2, ...; trajectory `cam_NN`, `NN = WALK - 1`);
+/// - `synthetic:floor:WALK:FRAMES`: the same walk sampled at `FRAMES` frames (fewer frames
+///   are the whole walk at a lower frame rate).
 ///
 /// ```
 /// let d = sndt_host::dataset::open_spec("synthetic:1:2", &Default::default()).unwrap();
 /// assert_eq!(d.frames().len(), 2);
+/// let f = sndt_host::dataset::open_spec("synthetic:floor:2:3", &Default::default()).unwrap();
+/// assert_eq!(f.frames()[2].to_string(), "synth_floor/cam_01/0002");
 /// ```
 pub fn open_spec(spec: &str, options: &OpenOptions) -> Result<Box<dyn Dataset>> {
     if let Some(rest) = spec.strip_prefix("synthetic") {
         let mut o = super::synthetic::SynthOptions::default();
-        let nums: Vec<&str> = rest.split(':').skip(1).collect();
-        if let [scenes, frames] = nums.as_slice() {
-            o.scenes = scenes.parse().with_context(|| format!("{spec}: scenes"))?;
-            o.frames = frames.parse().with_context(|| format!("{spec}: frames"))?;
-        } else if !rest.is_empty() {
-            bail!("{spec}: expected synthetic or synthetic:SCENES:FRAMES");
+        let parts: Vec<&str> = rest.split(':').skip(1).collect();
+        match parts.as_slice() {
+            [] if rest.is_empty() => {}
+            ["floor", more @ ..] if more.len() <= 2 => {
+                let walk = more.first().map_or(Ok(1), |w| w.parse());
+                let walk: u32 = walk.with_context(|| format!("{spec}: walk"))?;
+                if walk == 0 {
+                    bail!("{spec}: walks are numbered from 1");
+                }
+                o.floor = Some(walk);
+                o.frames = match more.get(1) {
+                    Some(f) => f.parse().with_context(|| format!("{spec}: frames"))?,
+                    None => super::synthetic::floor::DEFAULT_FRAMES,
+                };
+            }
+            [scenes, frames] => {
+                o.scenes = scenes.parse().with_context(|| format!("{spec}: scenes"))?;
+                o.frames = frames.parse().with_context(|| format!("{spec}: frames"))?;
+            }
+            _ => bail!(
+                "{spec}: expected synthetic, synthetic:SCENES:FRAMES, synthetic:floor, \
+                 synthetic:floor:WALK or synthetic:floor:WALK:FRAMES"
+            ),
         }
         return Ok(Box::new(super::synthetic::Synthetic::new(o)?));
     }
@@ -78,4 +105,51 @@ pub fn open(root: &Path, options: &OpenOptions) -> Result<Box<dyn Dataset>> {
         "{}: neither a prepared layout ({split}.txt or {split}/depth/) nor raw Hypersim (<scene>/_detail/)",
         root.display()
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frames(spec: &str) -> Result<Vec<String>> {
+        let d = open_spec(spec, &OpenOptions::default())?;
+        Ok(d.frames().iter().map(ToString::to_string).collect())
+    }
+
+    #[test]
+    fn synthetic_floor_specs() {
+        let short = frames("synthetic:floor:1:20").unwrap();
+        assert_eq!(short.len(), 20);
+        assert_eq!(short[19], "synth_floor/cam_00/0019");
+        let walk = frames("synthetic:floor").unwrap();
+        assert_eq!(walk.len(), 1000);
+        assert_eq!(walk[0], "synth_floor/cam_00/0000");
+        let two = frames("synthetic:floor:2").unwrap();
+        assert_eq!(
+            (two.len(), two[999].as_str()),
+            (1000, "synth_floor/cam_01/0999")
+        );
+        // The rooms' forms are as before.
+        assert_eq!(
+            frames("synthetic:2:3").unwrap()[3],
+            "synth_01_bedroom/cam_00/0000"
+        );
+        assert_eq!(frames("synthetic").unwrap().len(), 600);
+        for bad in [
+            "synthetic:floor:0",
+            "synthetic:floor:x",
+            "synthetic:floor:1:0",
+            "synthetic:floor:1:2:3",
+            "synthetic:floor:",
+            "synthetic:2",
+            "synthetic:flor:1",
+            "synthetics",
+        ] {
+            let err = format!("{:#}", frames(bad).unwrap_err());
+            let named = err.starts_with(bad) || err.starts_with("synthetic floor: need");
+            assert!(named, "{bad}: {err}");
+        }
+        let err = format!("{:#}", frames("synthetic:1:2:3").unwrap_err());
+        assert!(err.contains("synthetic:floor:WALK:FRAMES"), "{err}");
+    }
 }

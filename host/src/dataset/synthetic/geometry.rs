@@ -91,7 +91,7 @@ impl Aabb {
 
     /// Entry and exit distances of the ray `o + t d` (with `inv = 1/d`), if it meets the
     /// box before `t_max`.
-    fn slab(&self, o: &[f32; 3], inv: &[f32; 3], t_max: f32) -> Option<f32> {
+    pub(crate) fn slab(&self, o: &[f32; 3], inv: &[f32; 3], t_max: f32) -> Option<f32> {
         let (mut t0, mut t1) = (0.0f32, t_max);
         for a in 0..3 {
             let ta = (self.min[a] - o[a]) * inv[a];
@@ -203,6 +203,45 @@ impl Shape {
                     }
                 }
                 best
+            }
+        }
+    }
+
+    /// Euclidean distance from a point to the shape (0 inside).
+    ///
+    /// ```
+    /// use sndt_host::dataset::synthetic::geometry::Shape;
+    /// let b = Shape::Box { center: [0.0, 0.0, 0.0], half: [1.0, 1.0, 1.0], yaw: 0.0 };
+    /// assert_eq!(b.distance(&[4.0, 5.0, 0.5]), 5.0);
+    /// let c = Shape::Cylinder { xy: [0.0, 0.0], radius: 1.0, z0: 0.0, z1: 1.0 };
+    /// assert_eq!(c.distance(&[3.0, 0.0, 0.5]), 2.0);
+    /// ```
+    pub fn distance(&self, p: &[f32; 3]) -> f32 {
+        let (horizontal, dz) = self.excess(p);
+        (horizontal * horizontal + dz * dz).sqrt()
+    }
+
+    /// Distance from a point to the shape's footprint on the floor plan (ignoring z).
+    pub fn distance_2d(&self, p: &[f32; 2]) -> f32 {
+        self.excess(&[p[0], p[1], 0.0]).0
+    }
+
+    /// How far a point lies outside the shape across z (horizontally) and along z.
+    fn excess(&self, p: &[f32; 3]) -> (f32, f32) {
+        let out = |v: f32, lo: f32, hi: f32| (lo - v).max(v - hi).max(0.0);
+        match *self {
+            Shape::Box { center, half, yaw } => {
+                let (s, c) = yaw.sin_cos();
+                let (px, py) = (p[0] - center[0], p[1] - center[1]);
+                let l = [c * px + s * py, -s * px + c * py];
+                let dx = (l[0].abs() - half[0]).max(0.0);
+                let dy = (l[1].abs() - half[1]).max(0.0);
+                let dz = out(p[2], center[2] - half[2], center[2] + half[2]);
+                ((dx * dx + dy * dy).sqrt(), dz)
+            }
+            Shape::Cylinder { xy, radius, z0, z1 } => {
+                let r = ((p[0] - xy[0]).powi(2) + (p[1] - xy[1]).powi(2)).sqrt();
+                ((r - radius).max(0.0), out(p[2], z0, z1))
             }
         }
     }
@@ -370,6 +409,111 @@ impl Bvh {
     /// Whether a point lies inside any primitive.
     pub fn occupied(&self, p: &[f32; 3]) -> bool {
         self.prims.iter().any(|q| q.shape.contains(p))
+    }
+
+    /// The bounds of all primitives (empty: min above max).
+    pub fn bounds(&self) -> Aabb {
+        self.nodes[0].bounds
+    }
+}
+
+/// What the renderer casts rays against.
+pub trait Cast: Sync {
+    /// Nearest hit along `o + t d` with `0 < t < t_max`.
+    fn cast(&self, o: &[f32; 3], d: &[f32; 3], t_max: f32) -> Option<Hit>;
+}
+
+impl Cast for Bvh {
+    fn cast(&self, o: &[f32; 3], d: &[f32; 3], t_max: f32) -> Option<Hit> {
+        Bvh::cast(self, o, d, t_max)
+    }
+}
+
+/// Most parts a [`Group`] holds.
+pub const MAX_PARTS: usize = 64;
+
+/// Hierarchies side by side, each with its bounds (the rooms and the corridor of a
+/// building floor). A ray descends only into the parts whose bounds it enters before its
+/// nearest hit so far, nearest first: a camera in a closed room casts into that room, and
+/// into another part only through an opening. Finds the same nearest hit as one
+/// hierarchy over all primitives.
+#[derive(Clone, Debug)]
+pub struct Group {
+    parts: Vec<Bvh>,
+}
+
+impl Group {
+    /// One part per list of primitives (empty lists are dropped).
+    ///
+    /// # Panics
+    /// With more than [`MAX_PARTS`] parts.
+    ///
+    /// ```
+    /// use sndt_host::dataset::synthetic::geometry::{Cast, Group, Primitive};
+    /// let near = Primitive::axis_box([2.0, -1.0, -1.0], [2.1, 1.0, 1.0], 1, 1);
+    /// let far = Primitive::axis_box([5.0, -1.0, -1.0], [5.1, 1.0, 1.0], 2, 2);
+    /// let g = Group::new(vec![vec![far], vec![near]]);
+    /// let (hit, parts) = g.cast_counted(&[0.0, 0.0, 0.0], &[1.0, 0.0, 0.0], 100.0);
+    /// assert_eq!((hit.unwrap().label, parts), (1, 1)); // the far part is never entered
+    /// ```
+    pub fn new(parts: Vec<Vec<Primitive>>) -> Group {
+        let parts: Vec<Bvh> = parts
+            .into_iter()
+            .filter(|p| !p.is_empty())
+            .map(Bvh::new)
+            .collect();
+        assert!(
+            parts.len() <= MAX_PARTS,
+            "a group holds at most {MAX_PARTS} parts"
+        );
+        Group { parts }
+    }
+
+    /// The parts' hierarchies.
+    pub fn parts(&self) -> &[Bvh] {
+        &self.parts
+    }
+
+    /// All primitives of all parts.
+    pub fn primitives(&self) -> impl Iterator<Item = &Primitive> {
+        self.parts.iter().flat_map(Bvh::primitives)
+    }
+
+    /// The nearest hit and how many parts the ray descended into.
+    pub fn cast_counted(&self, o: &[f32; 3], d: &[f32; 3], t_max: f32) -> (Option<Hit>, usize) {
+        let inv = [1.0 / d[0], 1.0 / d[1], 1.0 / d[2]];
+        // The parts the ray enters, by entry distance (insertion sort: a handful).
+        let mut order = [(0.0f32, 0u8); MAX_PARTS];
+        let mut n = 0;
+        for (i, part) in self.parts.iter().enumerate() {
+            if let Some(t) = part.bounds().slab(o, &inv, t_max) {
+                let mut k = n;
+                while k > 0 && order[k - 1].0 > t {
+                    order[k] = order[k - 1];
+                    k -= 1;
+                }
+                order[k] = (t, i as u8);
+                n += 1;
+            }
+        }
+        let (mut best, mut limit, mut entered) = (None::<Hit>, t_max, 0);
+        for &(t, i) in &order[..n] {
+            if t >= limit {
+                break;
+            }
+            entered += 1;
+            if let Some(hit) = self.parts[i as usize].cast(o, d, limit) {
+                limit = hit.t;
+                best = Some(hit);
+            }
+        }
+        (best, entered)
+    }
+}
+
+impl Cast for Group {
+    fn cast(&self, o: &[f32; 3], d: &[f32; 3], t_max: f32) -> Option<Hit> {
+        self.cast_counted(o, d, t_max).0
     }
 }
 

@@ -2,15 +2,19 @@
 //! every tool runs without a download.
 //!
 //! - [`scenes`]: procedural rooms of six kinds built from labelled primitives;
+//! - [`floor`]: a building floor of eleven such rooms along a corridor, and walks through
+//!   all of them;
 //! - [`geometry`]: the primitives, a BVH and exact ray casting;
 //! - [`render`]: 1024x768 Euclidean range, planar depth, NYU40 labels and instances with
 //!   exact pinhole intrinsics;
 //! - [`trajectory`]: random walks of camera poses at person height looking into the scene;
 //! - [`DepthNoise`]: an optional range-dependent depth-noise model;
 //! - [`predict`]: a segmentation-network model producing ESANet-style top-3 predictions;
-//! - [`Synthetic`]: the split as a [`Dataset`] rendered on demand, and [`write_split`]
-//!   writing it in the prepared layout that [`crate::dataset::prepared`] reads.
+//! - [`Synthetic`]: the split (separate rooms, or a walk of the floor) as a [`Dataset`]
+//!   rendered on demand, and [`write_split`] writing it in the prepared layout that
+//!   [`crate::dataset::prepared`] reads.
 
+pub mod floor;
 pub mod geometry;
 pub mod predict;
 pub mod room;
@@ -19,6 +23,7 @@ pub mod scenes;
 use crate::dataset::frame::{Frame, FrameId, Rays};
 use crate::dataset::source::Dataset;
 use anyhow::{bail, Result};
+use geometry::Cast;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -36,6 +41,10 @@ pub const CAMERA: Pinhole = crate::dataset::synthetic::room::HYPERSIM_CAMERA;
 /// Rays longer than this hit nothing (metres).
 const MAX_RAY: f32 = 100.0;
 
+/// Added to the walk number to key the floor's noise and predictions (rooms use their
+/// scene number).
+const FLOOR_KEY: u64 = 0xF100;
+
 /// One rendered view.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Render {
@@ -49,8 +58,8 @@ pub struct Render {
     pub instances: Vec<u16>,
 }
 
-/// Renders `scene` from camera-to-world `pose` (OpenCV axes) with pinhole `cam`; rows in
-/// parallel.
+/// Renders `scene` (a room, the building floor: any [`Cast`]) from camera-to-world `pose`
+/// (OpenCV axes) with pinhole `cam`; rows in parallel.
 ///
 /// ```
 /// use sndt_host::dataset::synthetic::{render, scenes::SynthScene};
@@ -60,7 +69,7 @@ pub struct Render {
 /// let r = render(&scene, &pose, &cam);
 /// assert!(r.planar.iter().all(|&d| d > 0.0)); // a closed room: every ray hits
 /// ```
-pub fn render(scene: &SynthScene, pose: &Isometry3<f32>, cam: &Pinhole) -> Render {
+pub fn render<S: Cast + ?Sized>(scene: &S, pose: &Isometry3<f32>, cam: &Pinhole) -> Render {
     let (w, h) = (cam.width as usize, cam.height as usize);
     let rot = pose.rotation.to_rotation_matrix();
     let o = pose.translation.vector;
@@ -74,7 +83,7 @@ pub fn render(scene: &SynthScene, pose: &Isometry3<f32>, cam: &Pinhole) -> Rende
                     let d = rot * Vector3::new(r[0], r[1], r[2]);
                     let norm = (r[0] * r[0] + r[1] * r[1] + 1.0).sqrt();
                     // With unit-z camera rays, t is the planar depth directly.
-                    match scene.bvh.cast(&origin, &[d.x, d.y, d.z], MAX_RAY) {
+                    match scene.cast(&origin, &[d.x, d.y, d.z], MAX_RAY) {
                         Some(hit) => (hit.t * norm, hit.t, hit.label, hit.instance),
                         None => (0.0, 0.0, 0, 0),
                     }
@@ -247,6 +256,10 @@ pub struct SynthOptions {
     pub camera: Pinhole,
     /// The prediction model.
     pub model: predict::ModelParams,
+    /// `Some(walk)`: instead of `scenes` rooms, one trajectory of `frames` frames: walk
+    /// `walk` (1, 2, ...) of the building floor ([`floor`]), scene
+    /// [`floor::NAME`], camera `cam_NN` with `NN = walk - 1`.
+    pub floor: Option<u32>,
 }
 
 impl Default for SynthOptions {
@@ -259,6 +272,7 @@ impl Default for SynthOptions {
             predictions: true,
             camera: CAMERA,
             model: predict::ModelParams::DEFAULT,
+            floor: None,
         }
     }
 }
@@ -268,6 +282,8 @@ impl Default for SynthOptions {
 pub struct Synthetic {
     options: SynthOptions,
     scenes: Vec<SynthScene>,
+    /// The building floor, when the split is a walk of it (then `scenes` is empty).
+    floor: Option<floor::Floor>,
     poses: Vec<Vec<Isometry3<f32>>>,
     frames: Vec<FrameId>,
     rays: Arc<Rays>,
@@ -287,6 +303,9 @@ impl Synthetic {
     /// assert!(f.labels.is_some() && f.predictions.is_some());
     /// ```
     pub fn new(options: SynthOptions) -> Result<Synthetic> {
+        if let Some(walk) = options.floor {
+            return Self::floor(options, walk);
+        }
         if options.scenes == 0 || options.frames == 0 || options.frames > 10_000 {
             bail!("synthetic split: need 1.. scenes and 1..=10000 frames");
         }
@@ -319,10 +338,62 @@ impl Synthetic {
         Ok(Synthetic {
             options,
             scenes,
+            floor: None,
             poses,
             frames,
             rays,
         })
+    }
+
+    /// Builds the floor and walk `walk` of it.
+    ///
+    /// ```
+    /// use sndt_host::dataset::Dataset;
+    /// use sndt_host::dataset::synthetic::{Synthetic, SynthOptions};
+    /// let camera = sndt_core::Pinhole { fx: 40.0, fy: 40.0, cx: 32.0, cy: 24.0, width: 64, height: 48 };
+    /// let walk = Synthetic::new(SynthOptions { floor: Some(2), frames: 5, camera, ..Default::default() }).unwrap();
+    /// assert_eq!(walk.frames().len(), 5);
+    /// let f = walk.load(&walk.frames()[4]).unwrap();
+    /// assert_eq!(f.id.to_string(), "synth_floor/cam_01/0004");
+    /// assert!(f.labels.is_some() && f.predictions.is_some());
+    /// ```
+    fn floor(options: SynthOptions, walk: u32) -> Result<Synthetic> {
+        if walk == 0 || options.frames == 0 || options.frames > 10_000 {
+            bail!("synthetic floor: need a walk 1, 2, ... and 1..=10000 frames");
+        }
+        let floor = floor::Floor::generate(options.seed);
+        let poses = vec![floor.walk(walk, options.frames)];
+        let frames = (0..options.frames as u32)
+            .map(|index| FrameId {
+                scene: floor.name.clone(),
+                cam: Self::floor_cam(walk),
+                index,
+            })
+            .collect();
+        let rays = Arc::new(Rays::Pinhole(options.camera));
+        Ok(Synthetic {
+            options,
+            scenes: Vec::new(),
+            floor: Some(floor),
+            poses,
+            frames,
+            rays,
+        })
+    }
+
+    /// The camera (trajectory) name of walk `walk` of the floor.
+    fn floor_cam(walk: u32) -> String {
+        format!("cam_{:02}", walk - 1)
+    }
+
+    /// The building floor, when the split is a walk of it.
+    pub fn floor_scene(&self) -> Option<&floor::Floor> {
+        self.floor.as_ref()
+    }
+
+    /// The camera poses of every trajectory (one per scene, or the floor's walk).
+    pub fn poses(&self) -> &[Vec<Isometry3<f32>>] {
+        &self.poses
     }
 
     /// The scenes.
@@ -337,16 +408,42 @@ impl Synthetic {
 
     /// Renders a frame and also returns the instance image.
     pub fn render_frame(&self, id: &FrameId) -> Result<(Frame, Vec<u16>)> {
+        if let (Some(floor), Some(walk)) = (&self.floor, self.options.floor) {
+            if id.scene != floor.name
+                || id.cam != Self::floor_cam(walk)
+                || id.index as usize >= self.options.frames
+            {
+                bail!("{id}: no such frame in the synthetic floor's walk");
+            }
+            // Keys apart from the rooms' (scene numbers) and per walk.
+            let key = FLOOR_KEY + u64::from(walk);
+            return Ok(self.frame(id, floor, self.poses[0][id.index as usize], key));
+        }
         let Some(s) = self.scenes.iter().position(|s| s.name == id.scene) else {
             bail!("{id}: no such scene in the synthetic split");
         };
         if id.cam != "cam_00" || id.index as usize >= self.options.frames {
             bail!("{id}: no such frame in the synthetic split");
         }
-        let pose = self.poses[s][id.index as usize];
+        Ok(self.frame(
+            id,
+            &self.scenes[s],
+            self.poses[s][id.index as usize],
+            s as u64,
+        ))
+    }
+
+    /// Renders frame `id` of `scene` at `pose`, with noise and predictions keyed by `s`.
+    fn frame<S: Cast>(
+        &self,
+        id: &FrameId,
+        scene: &S,
+        pose: Isometry3<f32>,
+        s: u64,
+    ) -> (Frame, Vec<u16>) {
         let cam = &self.options.camera;
-        let r = render(&self.scenes[s], &pose, cam);
-        let frame_seed = self.options.seed ^ ((s as u64) << 32) ^ id.index as u64;
+        let r = render(scene, &pose, cam);
+        let frame_seed = self.options.seed ^ (s << 32) ^ id.index as u64;
         let mut depth = r.planar;
         if let Some(noise) = self.options.noise {
             noise.apply(&mut depth, frame_seed.wrapping_mul(31));
@@ -357,7 +454,7 @@ impl Synthetic {
                 &r.instances,
                 cam.width,
                 cam.height,
-                self.options.seed.wrapping_add(s as u64),
+                self.options.seed.wrapping_add(s),
                 id.index,
                 frame_seed.wrapping_mul(17),
                 &self.options.model,
@@ -372,12 +469,22 @@ impl Synthetic {
             labels: Some(r.labels),
             predictions,
         };
-        Ok((frame, r.instances))
+        (frame, r.instances)
     }
 }
 
 impl Dataset for Synthetic {
     fn describe(&self) -> String {
+        if let (Some(floor), Some(walk)) = (&self.floor, self.options.floor) {
+            return format!(
+                "synthetic building floor (seed {}): {} rooms, walk {walk} of {} frames of {}x{}",
+                self.options.seed,
+                floor.rooms.len(),
+                self.options.frames,
+                self.options.camera.width,
+                self.options.camera.height
+            );
+        }
         format!(
             "synthetic split (seed {}): {} scenes x {} frames of {}x{}",
             self.options.seed,

@@ -7,7 +7,7 @@
 //! boxes, shelves). A few unlabelled fixtures (ceiling lights, vents, sockets) give void
 //! pixels, as Hypersim has. Everything is deterministic in the seed.
 
-use super::geometry::{Bvh, Primitive, Shape};
+use super::geometry::{Bvh, Cast, Hit, Primitive, Shape};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::f32::consts::{FRAC_PI_2, PI};
@@ -108,6 +108,12 @@ pub struct SynthScene {
     pub interest: Vec<[f32; 3]>,
 }
 
+impl Cast for SynthScene {
+    fn cast(&self, o: &[f32; 3], d: &[f32; 3], t_max: f32) -> Option<Hit> {
+        self.bvh.cast(o, d, t_max)
+    }
+}
+
 impl SynthScene {
     /// Generates scene number `index` of the split with seed `seed`; the kind cycles
     /// through [`SceneKind::ALL`].
@@ -118,6 +124,66 @@ impl SynthScene {
     /// assert!(s.bvh.primitives().len() > 30);
     /// ```
     pub fn generate(index: usize, seed: u64) -> SynthScene {
+        let b = Self::build(index, seed);
+        SynthScene {
+            name: format!("synth_{index:02}_{}", b.kind.name()),
+            kind: b.kind,
+            size: b.size,
+            bvh: Bvh::new(b.prims),
+            interest: b.interest,
+        }
+    }
+
+    /// The room [`generate`](Self::generate) makes, with its door standing open in a
+    /// doorway cut through its wall: a room of a building floor
+    /// ([`floor`](crate::dataset::synthetic::floor)). Everything else is the same
+    /// primitives in the same (room) frame; `None` when the room has no door.
+    pub(crate) fn generate_open(index: usize, seed: u64) -> Option<OpenRoom> {
+        let mut b = Self::build(index, seed);
+        let (wall, along, leaf) = b.door?;
+        // The opening along the wall's axis (x for south and north, y for east and west).
+        let [x, y, _] = b.size;
+        let span = match wall {
+            0 | 1 => (along, along + DOOR_W),
+            2 => (x - along - DOOR_W, x - along),
+            _ => (y - along - DOOR_W, y - along),
+        };
+        let axis = if wall % 2 == 0 { 0 } else { 1 };
+        let w = b.prims[b.walls[wall]];
+        let Shape::Box { center, half, .. } = w.shape else {
+            return None;
+        };
+        let lo: [f32; 3] = std::array::from_fn(|a| center[a] - half[a]);
+        let hi: [f32; 3] = std::array::from_fn(|a| center[a] + half[a]);
+        let (mut left_hi, mut right_lo, mut lintel_lo, mut lintel_hi) = (hi, lo, lo, hi);
+        left_hi[axis] = span.0;
+        right_lo[axis] = span.1;
+        lintel_lo[axis] = span.0;
+        lintel_hi[axis] = span.1;
+        lintel_lo[2] = DOOR_H;
+        b.prims[b.walls[wall]] = Primitive::axis_box(lo, left_hi, WALL, w.instance);
+        b.prims
+            .push(Primitive::axis_box(right_lo, hi, WALL, w.instance));
+        b.prims
+            .push(Primitive::axis_box(lintel_lo, lintel_hi, WALL, w.instance));
+        // The leaf swung open into the room, inside the swing kept clear.
+        let pl = b.wall_place(wall, along);
+        let id = b.prims[leaf].instance;
+        b.lbox(&pl, [0.0, 0.04, 0.0], [0.04, 0.94, 2.05], DOOR, id);
+        b.prims.swap_remove(leaf);
+        Some(OpenRoom {
+            kind: b.kind,
+            size: b.size,
+            door_wall: wall,
+            door_span: span,
+            instances: b.next_instance,
+            prims: b.prims,
+            interest: b.interest,
+        })
+    }
+
+    /// Runs the generator of room `index`.
+    fn build(index: usize, seed: u64) -> Builder {
         let kind = SceneKind::ALL[index % SceneKind::ALL.len()];
         let mut rng =
             ChaCha8Rng::seed_from_u64(seed ^ (index as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
@@ -133,7 +199,7 @@ impl SynthScene {
                 3.0,
             ],
         };
-        let mut b = Builder::new(rng, size);
+        let mut b = Builder::new(rng, kind, size);
         b.shell();
         match kind {
             SceneKind::LivingRoom => b.living(),
@@ -144,13 +210,7 @@ impl SynthScene {
             SceneKind::OpenPlan => b.open_plan(),
         }
         b.fixtures();
-        SynthScene {
-            name: format!("synth_{index:02}_{}", kind.name()),
-            kind,
-            size,
-            bvh: Bvh::new(b.prims),
-            interest: b.interest,
-        }
+        b
     }
 
     /// Whether a camera may stand at `p`: inside the room, at least `margin` metres from
@@ -204,10 +264,33 @@ impl Place {
 }
 
 /// Wall, floor and ceiling thickness.
-const WALL_T: f32 = 0.12;
+pub(crate) const WALL_T: f32 = 0.12;
+
+/// Width of a door (and of the doorway of a room on a building floor).
+pub(crate) const DOOR_W: f32 = 0.9;
+
+/// Height of a doorway (the top of the door frame).
+pub(crate) const DOOR_H: f32 = 2.1;
+
+/// A room whose door stands open in a doorway through its wall
+/// ([`SynthScene::generate_open`]), in its own frame: interior `[0, size]`.
+#[derive(Clone, Debug)]
+pub(crate) struct OpenRoom {
+    pub kind: SceneKind,
+    pub size: [f32; 3],
+    pub prims: Vec<Primitive>,
+    pub interest: Vec<[f32; 3]>,
+    /// The wall of the doorway: 0 south (y = 0), 1 east (x = X), 2 north (y = Y), 3 west.
+    pub door_wall: usize,
+    /// The opening along the wall's axis (x for south and north, y for east and west).
+    pub door_span: (f32, f32),
+    /// The largest object instance (no primitive's is above it).
+    pub instances: u16,
+}
 
 struct Builder {
     rng: ChaCha8Rng,
+    kind: SceneKind,
     size: [f32; 3],
     prims: Vec<Primitive>,
     next_instance: u16,
@@ -216,18 +299,25 @@ struct Builder {
     /// Wall spans in use per wall (start, end along the wall) for wall-mounted items.
     wall_used: [Vec<(f32, f32)>; 4],
     interest: Vec<[f32; 3]>,
+    /// The four walls' primitives (south, east, north, west).
+    walls: [usize; 4],
+    /// The door: its wall, where it starts along it and its leaf's primitive.
+    door: Option<(usize, f32, usize)>,
 }
 
 impl Builder {
-    fn new(rng: ChaCha8Rng, size: [f32; 3]) -> Builder {
+    fn new(rng: ChaCha8Rng, kind: SceneKind, size: [f32; 3]) -> Builder {
         Builder {
             rng,
+            kind,
             size,
             prims: Vec::new(),
             next_instance: 1,
             blocked: Vec::new(),
             wall_used: Default::default(),
             interest: Vec::new(),
+            walls: [0; 4],
+            door: None,
         }
     }
 
@@ -445,15 +535,18 @@ impl Builder {
         self.aabb([-t, -t, -t], [x + t, y + t, 0.0], FLOOR, floor);
         self.aabb([-t, -t, z], [x + t, y + t, z + t], CEILING, ceiling);
         let walls = self.instance();
+        let first = self.prims.len();
         self.aabb([-t, -t, 0.0], [0.0, y + t, z], WALL, walls);
         self.aabb([x, -t, 0.0], [x + t, y + t, z], WALL, walls);
         self.aabb([0.0, -t, 0.0], [x, 0.0, z], WALL, walls);
         self.aabb([0.0, y, 0.0], [x, y + t, z], WALL, walls);
+        self.walls = [first + 2, first + 1, first + 3, first];
         // A door (with its swing kept clear) and one or two windows.
-        if let Some((wall, along)) = self.wall_span(0.9, None) {
+        if let Some((wall, along)) = self.wall_span(DOOR_W, None) {
             let pl = self.wall_place(wall, along);
             let id = self.instance();
-            self.lbox(&pl, [0.0, 0.0, 0.0], [0.9, 0.04, 2.05], DOOR, id);
+            self.door = Some((wall, along, self.prims.len()));
+            self.lbox(&pl, [0.0, 0.0, 0.0], [DOOR_W, 0.04, 2.05], DOOR, id);
             let frame = self.instance();
             self.lbox(
                 &pl,
