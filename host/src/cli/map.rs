@@ -165,14 +165,23 @@ fn print_spill(s: &SpillSummary, device_only: bool) {
         st.final_bytes
     );
     println!(
-        "    global map: tier {} ({:.0} MiB){}",
+        "    global map: tier {} ({:.0} MiB); scored below: the {} map; the {} map: \
+         mIoU {:.2} %, invR {:.2} %, mPAcc {:.2} %",
         s.global_tier,
         s.global_bytes as f64 / (1 << 20) as f64,
         if device_only {
-            "; scored: the device map alone"
+            "device"
         } else {
-            "; scored: the merged global map"
-        }
+            "merged global"
+        },
+        if device_only {
+            "merged global"
+        } else {
+            "device"
+        },
+        100.0 * s.other.0,
+        100.0 * s.other.1,
+        100.0 * s.other.2
     );
 }
 

@@ -110,6 +110,9 @@ pub struct SpillSummary {
     pub global_tier: usize,
     /// Bytes of the global map (its tier's fixed size).
     pub global_bytes: usize,
+    /// mIoU, invR and mPAcc of the other read-out: the device map alone when the merged
+    /// map is scored, the merged map when the device map is (both from one run).
+    pub other: (f64, f64, f64),
     /// Voxels and blocks of the device map at the end.
     pub device_voxels: usize,
     /// Blocks of the device map at the end.
@@ -431,29 +434,40 @@ fn evaluate_spilling<M: SpillingDevice>(
     progress: &(dyn Fn() + Sync),
 ) -> Result<TrajectoryEvaluation> {
     let mut map = M::create(options.config)?;
+    let other_readout = match readout {
+        Spill::Merged => Spill::DeviceOnly,
+        Spill::DeviceOnly => Spill::Merged,
+    };
     let mut input = Confusion::default();
     let mut kept = Vec::new();
     let mut skipped = Vec::new();
+    let mapped = std::cell::Cell::new(0usize);
+    let mut renders = 0usize;
     let frames = usable_frames(dataset, ids, options.config.cell_size, &mut skipped);
     let score = map_and_score(
         &mut map,
         frames.map(|frame| frame.map(Cow::Owned)),
         options.labels,
         options.stride,
-        &[readout],
+        &[readout, other_readout],
         |frame, _| {
             score_input(&mut input, frame, options.labels);
+            mapped.set(mapped.get() + 1);
             progress();
             Ok(())
         },
         |frame, rendered| {
-            if let Some(out) = &options.out {
-                write_backprojection(out, frame, rendered)?;
+            // The first read-out is the one asked for; the second is only scored.
+            if renders < mapped.get() {
+                if let Some(out) = &options.out {
+                    write_backprojection(out, frame, rendered)?;
+                }
+                if options.keep_frames.contains(&frame.id) {
+                    kept.push((frame.id.clone(), rendered.to_vec()));
+                }
+                progress();
             }
-            if options.keep_frames.contains(&frame.id) {
-                kept.push((frame.id.clone(), rendered.to_vec()));
-            }
-            progress();
+            renders += 1;
             Ok(())
         },
     )?;
@@ -470,8 +484,12 @@ fn evaluate_spilling<M: SpillingDevice>(
     };
     let mut stats = map.spill_stats().clone();
     stats.final_bytes += final_bytes;
+    let mut confusions = score.confusions.into_iter();
+    let confusion = confusions.next().unwrap_or_default();
+    let o = confusions.next().unwrap_or_default().metrics();
     let spill = SpillSummary {
         device: M::CAPACITY,
+        other: (o.miou, o.invr, o.mpacc),
         stats,
         global_tier: merged.tier(),
         global_bytes: merged.memory_bytes(),
@@ -479,7 +497,7 @@ fn evaluate_spilling<M: SpillingDevice>(
         device_blocks,
     };
     Ok(TrajectoryEvaluation {
-        confusion: score.confusions.into_iter().next().unwrap_or_default(),
+        confusion,
         input,
         result: TrajectoryResult {
             name: name.to_string(),
