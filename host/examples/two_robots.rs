@@ -57,7 +57,15 @@ fn main() -> anyhow::Result<()> {
             s.voxels_evicted
         );
     }
-    // Voxel by voxel: the same keys? the same class, mean, occupancy?
+    compare_voxels(&merged, &joint);
+    for (name, m) in [("merged", &merged), ("one map of both walks", &joint)] {
+        score(name, m, &walks, labels, cell)?;
+    }
+    Ok(())
+}
+
+/// Voxel by voxel: the same keys? the same class, mean, occupancy?
+fn compare_voxels(merged: &HostMap, joint: &HostMap) {
     let (mut shared, mut class_differs, mut occ_differs, mut shift) =
         (0usize, 0usize, 0usize, 0f64);
     for v in joint.voxels() {
@@ -87,26 +95,34 @@ fn main() -> anyhow::Result<()> {
         100.0 * class_differs as f64 / shared.max(1) as f64,
         100.0 * occ_differs as f64 / shared.max(1) as f64,
         1000.0 * shift / shared.max(1) as f64,
-        occupied(&merged),
-        occupied(&joint)
+        occupied(merged),
+        occupied(joint)
     );
-    for (name, m) in [("merged", &merged), ("one map of both walks", &joint)] {
-        let mut confusion = Confusion::default();
-        for walk in &walks {
-            for id in walk.frames() {
-                let frame = walk.load(id)?;
-                if let Some(gt) = &frame.labels {
-                    confusion.add_frame(gt, &backproject(&**m, &frame)?, &gt_depth(&frame));
-                }
+}
+
+/// The paper's metrics of `m` back-projected into every frame of both walks.
+fn score(
+    name: &str,
+    m: &HostMap,
+    walks: &[Box<dyn Dataset>],
+    labels: LabelSource,
+    cell: f32,
+) -> anyhow::Result<()> {
+    let mut confusion = Confusion::default();
+    for walk in walks {
+        for id in walk.frames() {
+            let frame = walk.load(id)?;
+            if let Some(gt) = &frame.labels {
+                confusion.add_frame(gt, &backproject(m, &frame)?, &gt_depth(&frame));
             }
         }
-        let x = confusion.metrics();
-        println!(
-            "{name}: mIoU {:.2} %, invR {:.2} %, mPAcc {:.2} % (both walks' frames, {labels:?} labels, cell {cell} m)",
-            100.0 * x.miou,
-            100.0 * x.invr,
-            100.0 * x.mpacc
-        );
     }
+    let x = confusion.metrics();
+    println!(
+        "{name}: mIoU {:.2} %, invR {:.2} %, mPAcc {:.2} % (both walks' frames, {labels:?} labels, cell {cell} m)",
+        100.0 * x.miou,
+        100.0 * x.invr,
+        100.0 * x.mpacc
+    );
     Ok(())
 }

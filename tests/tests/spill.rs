@@ -114,13 +114,17 @@ fn temp(name: &str) -> std::path::PathBuf {
     dir.join(name)
 }
 
-/// `sndt merge` of two saved maps equals `Map::merge`; of a device's record stream, the
-/// device's map (all it evicted and its final map); a corrupt stream is refused and no
-/// output is written.
-#[test]
-fn merge_command_merges_snapshots_and_streams() {
-    let data = room(6);
-    let config = Config::with_cell_size(0.1);
+/// Maps of two halves of a walk (`a`, `b`), and the record stream of a 1,024-voxel device
+/// on the whole walk (start, every evicted record, its final map, end) with the host map
+/// it gives (`joint`: the records merged as they come, then the device map).
+struct Robots {
+    a: Box<HostMap>,
+    b: Box<HostMap>,
+    stream: Vec<u8>,
+    joint: Box<HostMap>,
+}
+
+fn robots(data: &Synthetic, config: Config) -> Robots {
     let mut a: Box<HostMap> = boxed_map(config).unwrap();
     let mut b: Box<HostMap> = boxed_map(config).unwrap();
     let mut device: Box<Map<1024, 128, 40>> = boxed_map(config).unwrap();
@@ -161,7 +165,27 @@ fn merge_command_merges_snapshots_and_streams() {
     let n = out.end(device.as_ref(), 0, &mut buf).unwrap();
     stream.extend_from_slice(&buf[..n]);
     joint.merge(device.as_ref()).unwrap();
+    Robots {
+        a,
+        b,
+        stream,
+        joint,
+    }
+}
 
+/// `sndt merge` of two saved maps equals `Map::merge`; of a device's record stream, the
+/// device's map (all it evicted and its final map); a corrupt stream is refused and no
+/// output is written.
+#[test]
+fn merge_command_merges_snapshots_and_streams() {
+    let data = room(6);
+    let config = Config::with_cell_size(0.1);
+    let Robots {
+        mut a,
+        b,
+        stream,
+        joint,
+    } = robots(&data, config);
     let (pa, pb, ps) = (temp("a.sndt"), temp("b.sndt"), temp("uart.bin"));
     sndt_host::eval::evaluate::save_snapshot(a.as_ref(), &pa).unwrap();
     sndt_host::eval::evaluate::save_snapshot(b.as_ref(), &pb).unwrap();
