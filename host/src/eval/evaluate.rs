@@ -482,20 +482,10 @@ fn evaluate_spilling<M: SpillingDevice>(
         Spill::Merged => (merged.len(), merged.block_count()),
         Spill::DeviceOnly => (device_voxels, device_blocks),
     };
-    let mut stats = map.spill_stats().clone();
-    stats.final_bytes += final_bytes;
     let mut confusions = score.confusions.into_iter();
     let confusion = confusions.next().unwrap_or_default();
-    let o = confusions.next().unwrap_or_default().metrics();
-    let spill = SpillSummary {
-        device: M::CAPACITY,
-        other: (o.miou, o.invr, o.mpacc),
-        stats,
-        global_tier: merged.tier(),
-        global_bytes: merged.memory_bytes(),
-        device_voxels,
-        device_blocks,
-    };
+    let other = confusions.next().unwrap_or_default().metrics();
+    let spill = spill_summary(&map, merged, final_bytes, &other);
     Ok(TrajectoryEvaluation {
         confusion,
         input,
@@ -513,6 +503,27 @@ fn evaluate_spilling<M: SpillingDevice>(
         map: None,
         skipped: skipped.pop().map(|bad| bad.why),
     })
+}
+
+/// The spill figures of a finished [`evaluate_spilling`] run.
+fn spill_summary<M: SpillingDevice>(
+    map: &M,
+    merged: &GlobalMap,
+    final_bytes: u64,
+    other: &crate::eval::metrics::Metrics,
+) -> SpillSummary {
+    let (device_voxels, device_blocks, _) = map.device_counts();
+    let mut stats = map.spill_stats().clone();
+    stats.final_bytes += final_bytes;
+    SpillSummary {
+        device: M::CAPACITY,
+        other: (other.miou, other.invr, other.mpacc),
+        stats,
+        global_tier: merged.tier(),
+        global_bytes: merged.memory_bytes(),
+        device_voxels,
+        device_blocks,
+    }
 }
 
 /// What [`evaluate_spilling`] needs of a [`SpillingMap`] of any device capacity.
