@@ -55,19 +55,26 @@ pub fn open_spec(spec: &str, options: &OpenOptions) -> Result<Box<dyn Dataset>> 
     open(Path::new(spec), options)
 }
 
-/// Opens a dataset directory, detecting its layout, or a ROS 2 bag (`*.mcap`):
+/// Whether `path` is a ROS 2 recording: an `.mcap` file, or a rosbag2 folder (one with a
+/// `metadata.yaml`, as `ros2 bag record` writes).
+pub fn is_bag(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e == "mcap") || path.join("metadata.yaml").is_file()
+}
+
+/// Opens a dataset directory, detecting its layout, or a ROS 2 bag (an `.mcap` file or a
+/// rosbag2 folder):
 /// - a prepared layout has `<root>/<split>.txt` or `<root>/<split>/depth/` (a `warning:`
 ///   on stderr names each camera's missing intrinsics file, when it has an
 ///   `intrinsics/` directory);
 /// - raw Hypersim has `<root>/<scene>/_detail/`.
 pub fn open(root: &Path, options: &OpenOptions) -> Result<Box<dyn Dataset>> {
-    if root.extension().is_some_and(|e| e == "mcap") {
+    if is_bag(root) {
         let bag = crate::dataset::ros::bag::Bag::open(root, &options.bag)?;
         for (stamp, why) in &bag.skipped {
             eprintln!(
-                "warning: {}: skipped depth image at {:.9} s: {why}",
+                "warning: {}: skipped depth image at {} s: {why}",
                 root.display(),
-                *stamp as f64 * 1e-9
+                crate::dataset::ros::stamp_text(*stamp)
             );
         }
         return Ok(Box::new(bag));

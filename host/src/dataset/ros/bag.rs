@@ -1,46 +1,31 @@
-//! A ROS 2 recording (MCAP, CDR messages) as a dataset: depth images (`16UC1` millimetres or
-//! `32FC1` metres) paired with labels (`mono8` / `8UC1`) and camera info by header stamp,
-//! posed by the transform chain from the camera's frame to the world frame at the stamp.
-//! Topics are found by message type unless named.
+//! A ROS 2 recording (MCAP, CDR messages; one file or a rosbag2 folder) as a dataset:
+//! depth images (`16UC1` millimetres or `32FC1` metres) paired with labels (`mono8` /
+//! `8UC1`) and camera info by header stamp, posed by the transform chain from the camera's
+//! frame to the world frame at the stamp. Topics are found by message type unless named.
+//!
+//! Opening a bag indexes it in one pass ([`BagIndex`]); a frame's images are read from the
+//! file when the frame is loaded, so memory does not grow with the recording's length.
 
-use super::msgs::{
-    CameraInfo, Image, Odometry, PoseStamped, TfMessage, Transform, TransformStamped, Vector3,
-};
+use super::index::{check_layout, decode, BagIndex, ImageRef, ODOMETRY, POSE_STAMPED};
+pub use super::index::{TopicInfo, IMAGE};
+use super::mcap_read::McapParts;
+use super::msgs::{CameraInfo, Image, Transform, TransformStamped, Vector3};
+use super::stamp_text;
 use super::tf::{to_pose, TfBuffer};
 use crate::dataset::frame::{Frame, FrameId, Rays};
 pub use crate::dataset::source::BagOptions;
 use crate::dataset::source::Dataset;
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, bail, Result};
 use sndt_core::{validate_pose, DepthKind, Pinhole};
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 
-/// Message type names.
-const IMAGE: &str = "sensor_msgs/msg/Image";
-const CAMERA_INFO: &str = "sensor_msgs/msg/CameraInfo";
-const TF: &str = "tf2_msgs/msg/TFMessage";
-const POSE_STAMPED: &str = "geometry_msgs/msg/PoseStamped";
-const ODOMETRY: &str = "nav_msgs/msg/Odometry";
-
-/// One topic of a bag.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct TopicInfo {
-    /// Message type (schema name).
-    pub schema: String,
-    /// Messages.
-    pub count: usize,
-    /// First and last log time, ns.
-    pub time_range: (u64, u64),
-    /// Encoding of the first image (image topics).
-    pub encoding: Option<String>,
-}
-
 /// A depth image and what was paired with it.
 struct BagFrame {
     stamp: u64,
-    depth: Image,
-    labels: Option<Vec<u8>>,
+    depth: ImageRef,
+    labels: Option<ImageRef>,
     camera: Pinhole,
     pose: sndt_core::Isometry3<f32>,
 }
@@ -56,153 +41,8 @@ pub struct Bag {
     pub skipped: Vec<(u64, String)>,
     ids: Vec<FrameId>,
     frames: Vec<BagFrame>,
-}
-
-/// Decodes a CDR message.
-fn decode<T: serde::de::DeserializeOwned>(topic: &str, log_time: u64, data: &[u8]) -> Result<T> {
-    cdr::deserialize::<T>(data).map_err(|e| {
-        anyhow!(
-            "{topic} at {:.9} s: not a valid CDR message: {e}",
-            log_time as f64 * 1e-9
-        )
-    })
-}
-
-/// A CDR message of the bag: topic, schema name, log time, bytes.
-type RawMessage = (String, String, u64, Vec<u8>);
-
-/// Longest record accepted, inside chunks too: 64 MiB, twenty 1024x768 float depth
-/// images. Each record may be buffered at this size before its data turns out to be
-/// missing, so the limit also bounds the memory a corrupt bag can take.
-const MAX_RECORD_BYTES: usize = 1 << 26;
-
-/// Reads every record once, chunks decompressed, refusing any longer than
-/// [`MAX_RECORD_BYTES`]. The mcap crate's message stream trusts the lengths inside a chunk
-/// and allocates whatever one claims, so a corrupt length would abort the process (or
-/// take all memory) instead of failing.
-fn check_record_lengths(bytes: &[u8]) -> Result<()> {
-    use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
-    let options = LinearReaderOptions::default().with_record_length_limit(MAX_RECORD_BYTES);
-    let mut reader = LinearReader::new_with_options(options);
-    let mut rest = bytes;
-    while let Some(event) = reader.next_event() {
-        let event = event.context("reading the MCAP file (truncated or corrupt?)")?;
-        if let LinearReadEvent::ReadRequest(n) = event {
-            let n = n.min(rest.len());
-            reader.insert(n).copy_from_slice(&rest[..n]);
-            reader.notify_read(n);
-            rest = &rest[n..];
-        }
-    }
-    Ok(())
-}
-
-/// Refuses an uncompressed chunk holding a record longer than what is left of the chunk.
-/// The mcap crate (0.26) subtracts each such record's length from the chunk's remaining
-/// bytes without checking, which underflows (a panic with overflow checks, as in debug
-/// and fuzzing builds; garbage records without). Walks the top-level records as the
-/// crate does; anything else malformed is left to the crate, which reports it.
-fn check_uncompressed_chunks(bytes: &[u8]) -> Result<()> {
-    const MAGIC_LEN: usize = 8;
-    const CHUNK: u8 = 0x06;
-    let mut at = MAGIC_LEN;
-    while at < bytes.len() {
-        let (Some(&opcode), Some(len)) = (bytes.get(at), le_u64(bytes, at + 1)) else {
-            return Ok(());
-        };
-        let body = at + 9;
-        if opcode == CHUNK {
-            // Start and end times, uncompressed size and CRC, then the compression name
-            // and the records' length.
-            let Some(name_len) = le_bytes::<4>(bytes, body + 28).map(u32::from_le_bytes) else {
-                return Ok(());
-            };
-            let name_end = body + 32 + name_len as usize;
-            let (Some(name), Some(records_len)) =
-                (bytes.get(body + 32..name_end), le_u64(bytes, name_end))
-            else {
-                return Ok(());
-            };
-            if name.is_empty() {
-                check_chunk_records(bytes, name_end + 8, records_len)?;
-            }
-        }
-        let Some(next) = usize::try_from(len).ok().and_then(|l| body.checked_add(l)) else {
-            return Ok(());
-        };
-        at = next;
-    }
-    Ok(())
-}
-
-/// The records of an uncompressed chunk, `remaining` bytes from `at`: each must fit.
-fn check_chunk_records(bytes: &[u8], mut at: usize, mut remaining: u64) -> Result<()> {
-    while remaining > 0 {
-        let Some(len) = at.checked_add(1).and_then(|l| le_u64(bytes, l)) else {
-            return Ok(()); // truncated: the crate reports it
-        };
-        let record = len.saturating_add(9);
-        if record > remaining {
-            bail!("reading the MCAP file (truncated or corrupt?): a record of {record} bytes in a chunk with {remaining} bytes left");
-        }
-        remaining -= record;
-        at = at.saturating_add(usize::try_from(record).unwrap_or(usize::MAX));
-    }
-    Ok(())
-}
-
-/// The `N` bytes at `at`, if the input has them.
-fn le_bytes<const N: usize>(bytes: &[u8], at: usize) -> Option<[u8; N]> {
-    bytes.get(at..at.checked_add(N)?)?.try_into().ok()
-}
-
-/// The little-endian `u64` at `at`, if the input has it.
-fn le_u64(bytes: &[u8], at: usize) -> Option<u64> {
-    le_bytes::<8>(bytes, at).map(u64::from_le_bytes)
-}
-
-/// Every CDR message of the bag.
-fn messages(bytes: &[u8]) -> Result<Vec<RawMessage>> {
-    check_uncompressed_chunks(bytes)?;
-    check_record_lengths(bytes)?;
-    let mut out = Vec::new();
-    for m in mcap::MessageStream::new(bytes).context("not an MCAP file")? {
-        let m = m.context("reading the MCAP file (truncated or corrupt?)")?;
-        let schema = m
-            .channel
-            .schema
-            .as_ref()
-            .map_or(String::new(), |s| s.name.clone());
-        if m.channel.message_encoding != "cdr" {
-            continue;
-        }
-        out.push((
-            m.channel.topic.clone(),
-            schema,
-            m.log_time,
-            m.data.into_owned(),
-        ));
-    }
-    Ok(out)
-}
-
-/// Topic table of a bag's messages (the first image of each image topic decoded for its
-/// encoding).
-fn topic_table(msgs: &[RawMessage]) -> Result<BTreeMap<String, TopicInfo>> {
-    let mut topics: BTreeMap<String, TopicInfo> = BTreeMap::new();
-    for (topic, schema, t, data) in msgs {
-        let info = topics.entry(topic.clone()).or_insert_with(|| TopicInfo {
-            schema: schema.clone(),
-            time_range: (*t, *t),
-            ..TopicInfo::default()
-        });
-        info.count += 1;
-        info.time_range = (info.time_range.0.min(*t), info.time_range.1.max(*t));
-        if schema == IMAGE && info.encoding.is_none() {
-            info.encoding = Some(decode::<Image>(topic, *t, data)?.encoding);
-        }
-    }
-    Ok(topics)
+    label_map: Vec<(u8, u8)>,
+    parts: McapParts,
 }
 
 /// The image topic whose encoding is one of `encodings`, or the one named.
@@ -241,21 +81,24 @@ fn pick(
 }
 
 impl Bag {
-    /// Opens and indexes a bag.
+    /// Opens and indexes a bag: one `.mcap` file or a rosbag2 folder.
     pub fn open(path: &Path, o: &BagOptions) -> Result<Bag> {
-        let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
-        Bag::from_bytes(path, bytes, o)
+        Bag::new(BagIndex::open(path)?, o)
     }
 
     /// [`Bag::open`] of a bag already in memory; `path` only names it (in errors, and its
     /// stem as the frames' scene).
     pub fn from_bytes(path: &Path, bytes: Vec<u8>, o: &BagOptions) -> Result<Bag> {
-        let msgs = messages(&bytes).with_context(|| format!("{}", path.display()))?;
-        drop(bytes);
-        let topics = topic_table(&msgs)?;
-        let depth_topic = pick(&topics, &o.depth_topic, &["16UC1", "32FC1"], "depth")?
-            .ok_or_else(|| anyhow!("{}: no depth images (16UC1 or 32FC1)", path.display()))?;
-        let labels_topic = pick(&topics, &o.labels_topic, &["mono8", "8UC1"], "labels")?;
+        Bag::new(BagIndex::scan(path, McapParts::from_bytes(path, bytes))?, o)
+    }
+
+    /// Chooses the topics and world frame of an indexed bag and pairs its depth images;
+    /// an error says the first thing the bag lacks for mapping.
+    pub fn new(mut index: BagIndex, o: &BagOptions) -> Result<Bag> {
+        let topics = &index.topics;
+        let depth_topic = pick(topics, &o.depth_topic, &["16UC1", "32FC1"], "depth")?
+            .ok_or_else(|| anyhow!("{}: no depth images (16UC1 or 32FC1)", index.name))?;
+        let labels_topic = pick(topics, &o.labels_topic, &["mono8", "8UC1"], "labels")?;
         if let Some(t) = &o.pose_topic {
             match topics.get(t).map(|i| i.schema.as_str()) {
                 Some(POSE_STAMPED | ODOMETRY) => {}
@@ -265,34 +108,39 @@ impl Bag {
                 None => bail!("pose topic {t} has no messages in the bag"),
             }
         }
-        let mut c = collect(
-            &msgs,
-            &depth_topic,
-            labels_topic.as_deref(),
-            o.pose_topic.as_deref(),
-        )?;
-        let info_topic = camera_info_topic(&c, o, path)?;
-        let infos = c.infos.remove(&info_topic).unwrap_or_default();
+        let mut depths = index.images.remove(&depth_topic).unwrap_or_default();
+        depths.sort_by_key(|d| d.stamp);
+        let camera_frame = depths.first().map_or("", |d| d.frame_id.as_str());
+        let tf = transforms(&index, o.pose_topic.as_deref(), camera_frame);
+        let info_topic = camera_info_topic(&index, camera_frame, o)?;
+        let infos = index.infos.remove(&info_topic).unwrap_or_default();
+        let labels: BTreeMap<u64, ImageRef> = labels_topic
+            .as_ref()
+            .and_then(|t| index.images.remove(t))
+            .unwrap_or_default()
+            .into_iter()
+            .map(|l| (l.stamp, l))
+            .collect();
         let world = o.world_frame.clone().unwrap_or_else(|| "world".into());
         let mut bag = Bag {
-            name: path
-                .file_stem()
-                .map_or("bag".into(), |s| s.to_string_lossy().into_owned()),
-            topics,
+            name: index.name,
+            topics: index.topics,
             used: (depth_topic, labels_topic, info_topic, world),
             skipped: Vec::new(),
             ids: Vec::new(),
             frames: Vec::new(),
+            label_map: o.label_map.clone(),
+            parts: index.parts,
         };
         let paired = Paired {
-            labels: &c.labels,
+            labels: &labels,
             infos: &infos,
-            tf: &c.tf,
+            world_hint: world_hint(&tf, &bag.used.3),
+            tf: &tf,
             tolerance: o.sync_tolerance_ns,
-            label_map: &o.label_map,
         };
-        for depth in std::mem::take(&mut c.depths) {
-            let stamp = depth.header.stamp.nanos();
+        for depth in depths {
+            let stamp = depth.stamp;
             match bag.pair(depth, &paired) {
                 Ok(f) => bag.frames.push(f),
                 Err(e) => bag.skipped.push((stamp, format!("{e:#}"))),
@@ -309,11 +157,12 @@ impl Bag {
     }
 
     /// Pairs a depth image with its labels, camera and pose.
-    fn pair(&self, depth: Image, p: &Paired) -> Result<BagFrame> {
+    fn pair(&self, depth: ImageRef, p: &Paired) -> Result<BagFrame> {
         let (depth_topic, labels_topic, info_topic, world) = &self.used;
-        let stamp = depth.header.stamp.nanos();
-        let at = |topic: &str| format!("{topic} at {:.9} s", stamp as f64 * 1e-9);
-        check_image(&depth, &["16UC1", "32FC1"]).with_context(|| at(depth_topic))?;
+        let stamp = depth.stamp;
+        let at = |topic: &str| format!("{topic} at {} s", stamp_text(stamp));
+        check_image(&depth, &["16UC1", "32FC1"])
+            .map_err(|e| anyhow!("{}: {e}", at(depth_topic)))?;
         let near = |t: u64| t.abs_diff(stamp) <= p.tolerance;
         let info = p
             .infos
@@ -327,7 +176,8 @@ impl Bag {
                 )
             })?;
         let rectified = depth_topic.contains("rect");
-        let camera = pinhole(&info.1, &depth, rectified).with_context(|| at(info_topic))?;
+        let camera = pinhole(&info.1, depth.size, rectified)
+            .map_err(|e| anyhow!("{}: {e:#}", at(info_topic)))?;
         let labels = match labels_topic {
             None => None,
             Some(topic) => {
@@ -335,23 +185,23 @@ impl Bag {
                     .filter(|(t, _)| near(*t))
                     .ok_or_else(|| anyhow!("{}: no labels within the sync tolerance", at(topic)))?
                     .1;
-                check_image(m, &["mono8", "8UC1"]).with_context(|| at(topic))?;
-                if (m.width, m.height) != (depth.width, depth.height) {
+                check_image(m, &["mono8", "8UC1"]).map_err(|e| anyhow!("{}: {e}", at(topic)))?;
+                if m.size != depth.size {
                     bail!(
                         "{}: labels are {}x{}, depth {}x{}",
                         at(topic),
-                        m.width,
-                        m.height,
-                        depth.width,
-                        depth.height
+                        m.size.0,
+                        m.size.1,
+                        depth.size.0,
+                        depth.size.1
                     );
                 }
-                Some(map_labels(rows(m, 1).concat(), p.label_map))
+                Some(m.clone())
             }
         };
         let pose =
-            p.tf.lookup(world, &depth.header.frame_id, stamp)
-                .with_context(|| at(depth_topic))?;
+            p.tf.lookup(world, &depth.frame_id, stamp)
+                .map_err(|e| anyhow!("{}: {e:#}{}", at(depth_topic), p.world_hint))?;
         // The f32 pose the core gets: a transform chain can be finite in f64 and not in f32,
         // or far from a rotation; such a frame is skipped here, named, like other unusable
         // ones, not refused by the core while mapping.
@@ -375,73 +225,60 @@ impl Bag {
     pub fn stamps(&self) -> Vec<u64> {
         self.frames.iter().map(|f| f.stamp).collect()
     }
+
+    /// Reads an image message back from the recording, checked again (the file may have
+    /// changed since it was indexed).
+    fn image(&self, r: &ImageRef, topic: &str) -> Result<Image> {
+        let data = self.parts.read(r.at)?;
+        let m: Image = decode(topic, r.stamp, &data)?;
+        if (m.width, m.height, &m.encoding) != (r.size.0, r.size.1, &r.encoding) {
+            bail!(
+                "{topic} at {} s: the image changed since the bag was opened",
+                stamp_text(r.stamp)
+            );
+        }
+        check_layout(&m).map_err(|e| anyhow!("{topic} at {} s: {e}", stamp_text(r.stamp)))?;
+        Ok(m)
+    }
 }
 
 /// What a depth image is paired with.
 struct Paired<'a> {
-    labels: &'a BTreeMap<u64, Image>,
+    labels: &'a BTreeMap<u64, ImageRef>,
     infos: &'a [(u64, CameraInfo)],
     tf: &'a TfBuffer,
     tolerance: u64,
-    label_map: &'a [(u8, u8)],
+    /// Added to a failed lookup's reason: the roots to try when the world frame is not in
+    /// the tree.
+    world_hint: String,
 }
 
-/// The messages sndt uses, decoded.
-struct Collected {
-    tf: TfBuffer,
-    infos: BTreeMap<String, Vec<(u64, CameraInfo)>>,
-    depths: Vec<Image>,
-    labels: BTreeMap<u64, Image>,
-}
-
-/// Decodes the transforms, camera infos, depth and label images; poses from `pose_topic`
-/// become transforms (of the depth camera for `PoseStamped`, of the odometry's child
-/// frame for `Odometry`) that replace the `/tf` and `/tf_static` ones of that frame.
-fn collect(
-    msgs: &[RawMessage],
-    depth_topic: &str,
-    labels_topic: Option<&str>,
-    pose_topic: Option<&str>,
-) -> Result<Collected> {
-    let mut c = Collected {
-        tf: TfBuffer::default(),
-        infos: BTreeMap::new(),
-        depths: Vec::new(),
-        labels: BTreeMap::new(),
-    };
-    let (mut tfs, mut poses) = (Vec::new(), Vec::new());
-    for (topic, schema, t, data) in msgs {
-        match schema.as_str() {
-            TF => tfs.push((topic == "/tf_static", decode::<TfMessage>(topic, *t, data)?)),
-            CAMERA_INFO => {
-                let m: CameraInfo = decode(topic, *t, data)?;
-                let entry = c.infos.entry(topic.clone()).or_default();
-                entry.push((m.header.stamp.nanos(), m));
-            }
-            IMAGE if topic == depth_topic => c.depths.push(decode::<Image>(topic, *t, data)?),
-            IMAGE if Some(topic.as_str()) == labels_topic => {
-                let m: Image = decode(topic, *t, data)?;
-                c.labels.insert(m.header.stamp.nanos(), m);
-            }
-            POSE_STAMPED if Some(topic.as_str()) == pose_topic => poses
-                .push(decode::<PoseStamped>(topic, *t, data).map(|m| (None, m.header, m.pose))?),
-            ODOMETRY if Some(topic.as_str()) == pose_topic => {
-                let m: Odometry = decode(topic, *t, data)?;
-                poses.push((Some(m.child_frame_id), m.header, m.pose.pose));
-            }
-            _ => {}
-        }
+/// When `world` is not a frame of the transform tree: a hint naming the tree's roots.
+fn world_hint(tf: &TfBuffer, world: &str) -> String {
+    if tf.frames().contains(world) {
+        return String::new();
     }
-    c.depths.sort_by_key(|d| d.header.stamp.nanos());
-    let camera = c
-        .depths
-        .first()
-        .map_or(String::new(), |d| d.header.frame_id.clone());
+    let roots = tf.roots();
+    match roots.first() {
+        None => format!(" (the bag has no transforms, so no frame reaches {world})"),
+        Some(first) => format!(
+            " (frame {world} is not in the transform tree, whose roots are {}: try --world-frame {first})",
+            roots.join(", ")
+        ),
+    }
+}
+
+/// The transform buffer: poses from `pose_topic` become transforms (of the depth camera
+/// for `PoseStamped`, of the odometry's child frame for `Odometry`) that replace the `/tf`
+/// and `/tf_static` ones of that frame.
+fn transforms(index: &BagIndex, pose_topic: Option<&str>, camera: &str) -> TfBuffer {
+    let poses = pose_topic.and_then(|t| index.poses.get(t));
     let posed: Vec<TransformStamped> = poses
         .into_iter()
+        .flatten()
         .map(|(child, header, pose)| TransformStamped {
-            header,
-            child_frame_id: child.unwrap_or_else(|| camera.clone()),
+            header: header.clone(),
+            child_frame_id: child.clone().unwrap_or_else(|| camera.to_string()),
             transform: Transform {
                 translation: Vector3 {
                     x: pose.position.x,
@@ -452,37 +289,38 @@ fn collect(
             },
         })
         .collect();
-    c.tf.add(&posed, false);
+    let mut tf = TfBuffer::default();
+    tf.add(&posed, false);
     let posed_frames: Vec<&String> = posed.iter().map(|t| &t.child_frame_id).collect();
-    for (fixed, m) in &tfs {
+    for (fixed, m) in &index.tfs {
         let keep: Vec<TransformStamped> = m
             .transforms
             .iter()
             .filter(|t| !posed_frames.contains(&&t.child_frame_id))
             .cloned()
             .collect();
-        c.tf.add(&keep, *fixed);
+        tf.add(&keep, *fixed);
     }
-    c.tf.finish();
-    Ok(c)
+    tf.finish();
+    tf
 }
 
 /// The camera-info topic: the one named, else the one in the depth images' frame, else
 /// the only one.
-fn camera_info_topic(c: &Collected, o: &BagOptions, path: &Path) -> Result<String> {
+fn camera_info_topic(index: &BagIndex, frame: &str, o: &BagOptions) -> Result<String> {
     if let Some(t) = &o.camera_info_topic {
-        if !c.infos.contains_key(t) {
+        if !index.infos.contains_key(t) {
             bail!("camera-info topic {t} has no sensor_msgs/msg/CameraInfo messages in the bag");
         }
         return Ok(t.clone());
     }
-    let frame = c.depths.first().map_or("", |d| d.header.frame_id.as_str());
-    c.infos
+    index
+        .infos
         .iter()
         .find(|(_, v)| v.iter().any(|(_, m)| m.header.frame_id == frame))
-        .or_else(|| c.infos.iter().next())
+        .or_else(|| index.infos.iter().next())
         .map(|(t, _)| t.clone())
-        .ok_or_else(|| anyhow!("{}: no sensor_msgs/msg/CameraInfo topic", path.display()))
+        .ok_or_else(|| anyhow!("{}: no sensor_msgs/msg/CameraInfo topic", index.name))
 }
 
 /// Labels through a label map (`(id, class)`; unlisted ids become void); unchanged when
@@ -509,29 +347,15 @@ fn nearest<T>(map: &BTreeMap<u64, T>, stamp: u64) -> Option<(u64, &T)> {
         .map(|(t, v)| (*t, v))
 }
 
-/// Checks an image's encoding and size.
-fn check_image(m: &Image, encodings: &[&str]) -> Result<()> {
+/// Checks a located image's encoding and that its data held its rows.
+fn check_image(m: &ImageRef, encodings: &[&str]) -> Result<(), String> {
     if !encodings.contains(&m.encoding.as_str()) {
-        bail!("encoding {:?}, expected one of {encodings:?}", m.encoding);
+        return Err(format!(
+            "encoding {:?}, expected one of {encodings:?}",
+            m.encoding
+        ));
     }
-    let bpp = if m.encoding.starts_with("32") {
-        4
-    } else if m.encoding.starts_with("16") {
-        2
-    } else {
-        1
-    };
-    let (w, h, step) = (m.width as usize, m.height as usize, m.step as usize);
-    if w == 0 || h == 0 || step < w * bpp || m.data.len() < step * h {
-        bail!(
-            "{}x{} image with step {} and {} bytes of data",
-            w,
-            h,
-            step,
-            m.data.len()
-        );
-    }
-    Ok(())
+    m.layout_error.clone().map_or(Ok(()), Err)
 }
 
 /// The rows of an image without their padding, `bpp` bytes per pixel.
@@ -546,7 +370,7 @@ fn rows(m: &Image, bpp: usize) -> Vec<&[u8]> {
 /// distortion, the projection `P` for a rectified one (whose `D` describes the raw image);
 /// a raw image with distortion is refused. sndt's pixel centres are at `col + 0.5`, ROS's
 /// at integers.
-fn pinhole(info: &CameraInfo, image: &Image, rectified: bool) -> Result<Pinhole> {
+fn pinhole(info: &CameraInfo, (width, height): (u32, u32), rectified: bool) -> Result<Pinhole> {
     let distorted = info.d.iter().any(|&d| d != 0.0);
     if distorted && !rectified {
         bail!(
@@ -554,13 +378,11 @@ fn pinhole(info: &CameraInfo, image: &Image, rectified: bool) -> Result<Pinhole>
             info.distortion_model
         );
     }
-    if (info.width, info.height) != (image.width, image.height) {
+    if (info.width, info.height) != (width, height) {
         bail!(
-            "camera info is {}x{}, the image {}x{}",
+            "camera info is {}x{}, the image {width}x{height}",
             info.width,
             info.height,
-            image.width,
-            image.height
         );
     }
     let (k, p) = (info.k, info.p);
@@ -645,13 +467,22 @@ impl Dataset for Bag {
             .get(id.index as usize)
             .filter(|_| id.scene == self.name)
             .ok_or_else(|| anyhow!("{id}: not a frame of bag {}", self.name))?;
+        let (depth_topic, labels_topic, ..) = &self.used;
+        let depth = self.image(&f.depth, depth_topic)?;
+        let labels = match (&f.labels, labels_topic) {
+            (Some(r), Some(topic)) => {
+                let m = self.image(r, topic)?;
+                Some(map_labels(rows(&m, 1).concat(), &self.label_map))
+            }
+            _ => None,
+        };
         Ok(Frame {
             id: id.clone(),
             pose: f.pose,
             rays: Arc::new(Rays::Pinhole(f.camera)),
-            depth: depth_metres(&f.depth),
+            depth: depth_metres(&depth),
             depth_kind: DepthKind::Planar,
-            labels: f.labels.clone(),
+            labels,
             predictions: None,
         })
     }

@@ -4,6 +4,32 @@
 
 use serde::{Deserialize, Serialize};
 
+/// Decodes a CDR message: the 4-byte encapsulation header (plain CDR, big- or
+/// little-endian), then the fields. Each declared string or sequence length is checked
+/// against the bytes left before anything is copied, so a corrupt length is an error, not
+/// an allocation of up to 4 GiB.
+///
+/// ```
+/// use sndt_host::dataset::ros::msgs::{from_cdr, Time};
+/// let le = [0, 1, 0, 0, 7, 0, 0, 0, 9, 0, 0, 0];
+/// assert_eq!(from_cdr::<Time>(&le), Ok(Time { sec: 7, nanosec: 9 }));
+/// // A string claiming 4 GiB in a 12-byte message.
+/// let bad = [0, 1, 0, 0, 0xff, 0xff, 0xff, 0xff, b'a', 0, 0, 0];
+/// assert!(from_cdr::<String>(&bad).is_err());
+/// ```
+pub fn from_cdr<T: serde::de::DeserializeOwned>(data: &[u8]) -> Result<T, String> {
+    use byteorder::{BigEndian, LittleEndian};
+    let (Some(header), Some(body)) = (data.get(..4), data.get(4..)) else {
+        return Err("shorter than its 4-byte encapsulation header".into());
+    };
+    let decoded = match header[1] {
+        0 | 2 => cdr_encoding::from_bytes::<T, BigEndian>(body),
+        1 | 3 => cdr_encoding::from_bytes::<T, LittleEndian>(body),
+        other => return Err(format!("encapsulation {other:#04x} is not plain CDR")),
+    };
+    decoded.map(|(v, _)| v).map_err(|e| e.to_string())
+}
+
 /// `builtin_interfaces/msg/Time`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
 pub struct Time {

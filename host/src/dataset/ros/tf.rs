@@ -4,9 +4,10 @@
 //! slerp).
 
 use super::msgs::{Transform, TransformStamped};
+use super::stamp_text;
 use anyhow::{bail, Result};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
-use std::collections::HashMap;
+use std::collections::{BTreeSet, HashMap};
 
 /// Largest deviation of a transform's quaternion norm from 1.
 pub const QUAT_NORM_TOLERANCE: f64 = 1e-3;
@@ -56,6 +57,62 @@ impl TfBuffer {
         }
     }
 
+    /// Every frame named in the tree, as child or parent.
+    pub fn frames(&self) -> BTreeSet<String> {
+        let fixed = self.fixed.iter().map(|(c, (p, _))| (c, p));
+        let moving = self.moving.iter().map(|(c, (p, _))| (c, p));
+        fixed
+            .chain(moving)
+            .flat_map(|(c, p)| [c.clone(), p.clone()])
+            .collect()
+    }
+
+    /// The hops of the tree, sorted by child: (child, parent, `None` for a `/tf_static`
+    /// hop or the number of `/tf` samples).
+    pub fn edges(&self) -> Vec<(String, String, Option<usize>)> {
+        let fixed = self
+            .fixed
+            .iter()
+            .map(|(c, (p, _))| (c.clone(), p.clone(), None));
+        let moving = self
+            .moving
+            .iter()
+            .map(|(c, (p, v))| (c.clone(), p.clone(), Some(v.len())));
+        let mut edges: Vec<_> = fixed.chain(moving).collect();
+        edges.sort();
+        edges
+    }
+
+    /// The roots of the tree: frames that are parents and have no parent themselves (the
+    /// candidates for a world frame), sorted.
+    ///
+    /// ```
+    /// use sndt_host::dataset::ros::msgs::{Header, TransformStamped};
+    /// use sndt_host::dataset::ros::tf::TfBuffer;
+    /// let hop = |parent: &str, child: &str| TransformStamped {
+    ///     header: Header { frame_id: parent.into(), ..Default::default() },
+    ///     child_frame_id: child.into(),
+    ///     ..Default::default()
+    /// };
+    /// let mut tf = TfBuffer::default();
+    /// tf.add(&[hop("odom", "base_link"), hop("base_link", "camera")], false);
+    /// tf.add(&[hop("map", "odom")], true);
+    /// assert_eq!(tf.roots(), ["map"]);
+    /// assert_eq!(tf.frames().len(), 4);
+    /// ```
+    pub fn roots(&self) -> Vec<String> {
+        let children: BTreeSet<&String> = self.fixed.keys().chain(self.moving.keys()).collect();
+        let parents = self.fixed.values().map(|(p, _)| p);
+        let parents: BTreeSet<&String> = parents
+            .chain(self.moving.values().map(|(p, _)| p))
+            .collect();
+        parents
+            .into_iter()
+            .filter(|p| !children.contains(p))
+            .cloned()
+            .collect()
+    }
+
     /// The pose of `frame` in `world` at `stamp` (ns), as the f64 isometry of the chain.
     pub fn lookup(&self, world: &str, frame: &str, stamp: u64) -> Result<Isometry3<f64>> {
         let mut pose = Isometry3::identity();
@@ -91,10 +148,10 @@ impl TfBuffer {
             _ => {
                 let (first, last) = (samples[0].0, samples[samples.len() - 1].0);
                 bail!(
-                    "no transform {parent} <- {child} at {:.9} s: /tf has it from {:.9} to {:.9} s",
-                    stamp as f64 * 1e-9,
-                    first as f64 * 1e-9,
-                    last as f64 * 1e-9
+                    "no transform {parent} <- {child} at {} s: /tf has it from {} to {} s",
+                    stamp_text(stamp),
+                    stamp_text(first),
+                    stamp_text(last)
                 )
             }
         }
