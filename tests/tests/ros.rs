@@ -605,3 +605,94 @@ fn a_pose_the_core_refuses_skips_the_frame_with_the_reason() {
         "{reasons:?}"
     );
 }
+
+/// A tree rooted at another frame than `--world-frame`: every frame is skipped, and the
+/// reason names the roots found and the flag to give. `sndt info`'s report lists the
+/// topics with their rates and the tree before saying so.
+#[test]
+fn a_world_frame_outside_the_tree_names_the_roots_to_use() {
+    use sndt_host::cli::info::{contents, usage};
+    use sndt_host::dataset::ros::index::BagIndex;
+    let dir = temp("world");
+    let s = split(3);
+    let path = dir.join("t.mcap");
+    write_trajectory(&path, s.frames().iter().map(|id| s.load(id))).unwrap();
+    let o = BagOptions {
+        world_frame: Some("odom".into()),
+        ..BagOptions::default()
+    };
+    let index = BagIndex::open(&path).unwrap();
+    let report = contents(&index);
+    // 3 frames at 10 Hz: the depth topic's rate is exactly 10 Hz; /tf_static is fixed.
+    assert!(
+        report.contains("| 3 | 10.00 | 1.000000000 | 1.200000000 | 16UC1 |"),
+        "{report}"
+    );
+    assert!(report.contains("roots: world"), "{report}");
+    assert!(
+        report.contains("world <- base_link (/tf, 3 samples)"),
+        "{report}"
+    );
+    assert!(
+        report.contains("base_link <- camera_depth_optical_frame (static)"),
+        "{report}"
+    );
+    let bag = Bag::new(index, &o).unwrap();
+    assert_eq!(bag.frames().len(), 0);
+    assert_eq!(bag.skipped.len(), 3);
+    let why = usage(&bag);
+    assert!(why.contains("try --world-frame world"), "{why}");
+    // With the root named, every frame is used.
+    let o = BagOptions {
+        world_frame: Some("world".into()),
+        ..BagOptions::default()
+    };
+    assert_eq!(Bag::open(&path, &o).unwrap().frames().len(), 3);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// An image message whose data claims 4 GiB in a message of a few hundred bytes: the bag
+/// is refused with an error naming the topic, without allocating the claimed length (the
+/// CDR reader checks a length against the bytes left before copying).
+#[test]
+fn a_cdr_length_past_the_message_is_an_error_not_an_allocation() {
+    let mut cdr = vec![0u8, 1, 0, 0]; // plain CDR, little-endian
+    cdr.extend_from_slice(&1i32.to_le_bytes()); // stamp.sec
+    cdr.extend_from_slice(&0u32.to_le_bytes()); // stamp.nanosec
+    cdr.extend_from_slice(&4u32.to_le_bytes()); // frame_id: "cam\0"
+    cdr.extend_from_slice(b"cam\0");
+    cdr.extend_from_slice(&2u32.to_le_bytes()); // height
+    cdr.extend_from_slice(&2u32.to_le_bytes()); // width
+    cdr.extend_from_slice(&6u32.to_le_bytes()); // encoding: "16UC1\0"
+    cdr.extend_from_slice(b"16UC1\0");
+    cdr.extend_from_slice(&[0, 0]); // is_bigendian, then padding to 4
+    cdr.extend_from_slice(&4u32.to_le_bytes()); // step
+    cdr.extend_from_slice(&0xffff_fff0u32.to_le_bytes()); // data: 4 GiB claimed
+    cdr.extend_from_slice(&[0u8; 8]);
+    let mut out = std::io::Cursor::new(Vec::new());
+    let options = mcap::WriteOptions::new().compression(None);
+    let mut w = mcap::Writer::with_options(&mut out, options).unwrap();
+    let (name, def) = msgs::definitions::image();
+    let schema = w.add_schema(name, "ros2msg", def.as_bytes()).unwrap();
+    let channel = w
+        .add_channel(schema, names::DEPTH, "cdr", &Default::default())
+        .unwrap();
+    let header = mcap::records::MessageHeader {
+        channel_id: channel,
+        sequence: 1,
+        log_time: 1_000_000_000,
+        publish_time: 1_000_000_000,
+    };
+    w.write_to_known_channel(&header, &cdr).unwrap();
+    w.finish().unwrap();
+    drop(w);
+    let path = temp("cdr-length").join("bag.mcap");
+    let e = Bag::from_bytes(&path, out.into_inner(), &BagOptions::default())
+        .err()
+        .expect("a CDR length past the message must be refused");
+    let e = format!("{e:#}");
+    assert!(
+        e.contains(names::DEPTH) && e.contains("not a valid CDR message"),
+        "{e}"
+    );
+}
