@@ -696,3 +696,173 @@ fn a_cdr_length_past_the_message_is_an_error_not_an_allocation() {
         "{e}"
     );
 }
+
+/// The header (profile, library) and the metadata records (name, key-value pairs) of an
+/// MCAP file, read with the `mcap` crate's record reader.
+fn header_and_metadata(bytes: &[u8]) -> (mcap::records::Header, Vec<mcap::records::Metadata>) {
+    let mut header = None;
+    let mut metadata = Vec::new();
+    for record in mcap::read::LinearReader::new(bytes).unwrap() {
+        match record.unwrap() {
+            mcap::records::Record::Header(h) => header = Some(h),
+            mcap::records::Record::Metadata(m) => metadata.push(m),
+            _ => {}
+        }
+    }
+    (header.expect("an MCAP file starts with a header"), metadata)
+}
+
+#[test]
+fn a_written_bag_is_a_rosbag2_mcap_file_with_the_recorded_qos() {
+    let dir = temp("rosbag2");
+    let s = split(3);
+    let path = dir.join("t.mcap");
+    write_trajectory(&path, s.frames().iter().map(|id| s.load(id))).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let (header, metadata) = header_and_metadata(&bytes);
+    // rosbag2's MCAP storage plugin writes the `ros2` profile and, on Humble, the
+    // distribution in a `rosbag2` metadata record.
+    assert_eq!(header.profile, "ros2");
+    assert!(header.library.starts_with("sndt "), "{}", header.library);
+    assert_eq!(metadata.len(), 1);
+    assert_eq!(metadata[0].name, "rosbag2");
+    assert_eq!(metadata[0].metadata["ROS_DISTRO"], "humble");
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    let mut topics: Vec<&str> = Vec::new();
+    for channel in summary.channels.values() {
+        let qos = &channel.metadata["offered_qos_profiles"];
+        topics.push(&channel.topic);
+        // rmw's enums: durability 1 transient local, 2 volatile; reliability 1 reliable;
+        // history 1 keep last.
+        let durability = if channel.topic == "/tf_static" { 1 } else { 2 };
+        assert!(
+            qos.starts_with("- history: 1\n"),
+            "{}: {qos}",
+            channel.topic
+        );
+        assert!(
+            qos.contains("\n  reliability: 1\n"),
+            "{}: {qos}",
+            channel.topic
+        );
+        assert!(
+            qos.contains(&format!("\n  durability: {durability}\n")),
+            "{}: {qos}",
+            channel.topic
+        );
+        assert_eq!(channel.message_encoding, "cdr");
+        assert_eq!(channel.schema.as_ref().unwrap().encoding, "ros2msg");
+    }
+    topics.sort_unstable();
+    assert_eq!(
+        topics,
+        [
+            names::CAMERA_INFO,
+            names::DEPTH,
+            names::LABELS,
+            "/tf",
+            "/tf_static"
+        ]
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_folder_path_writes_a_rosbag2_folder_of_the_same_bag() {
+    use sndt_host::dataset::ros::metadata::{bag_files, MetadataFile};
+    let dir = temp("folder");
+    let s = split(3);
+    let file = dir.join("t.mcap");
+    write_trajectory(&file, s.frames().iter().map(|id| s.load(id))).unwrap();
+    // A path ending in a separator names a folder: `rec/rec_0.mcap` and `rec/metadata.yaml`.
+    let folder = dir.join("rec/");
+    write_trajectory(&folder, s.frames().iter().map(|id| s.load(id))).unwrap();
+    let mcap_file = dir.join("rec").join("rec_0.mcap");
+    assert_eq!(
+        bag_files(&dir.join("rec")).unwrap(),
+        std::slice::from_ref(&mcap_file)
+    );
+    let bytes = std::fs::read(&mcap_file).unwrap();
+    assert!(
+        bytes == std::fs::read(&file).unwrap(),
+        "the folder holds the same MCAP file"
+    );
+    // metadata.yaml agrees with the MCAP file's own statistics.
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    let stats = summary.stats.clone().unwrap();
+    let info = MetadataFile::read(&dir.join("rec"))
+        .unwrap()
+        .rosbag2_bagfile_information;
+    assert_eq!(
+        (info.version, info.storage_identifier.as_str()),
+        (5, "mcap")
+    );
+    assert_eq!(info.message_count, stats.message_count);
+    assert_eq!(
+        info.message_count,
+        1 + 4 * 3,
+        "tf_static, and per frame tf, info, depth, labels"
+    );
+    assert_eq!(
+        info.starting_time.nanoseconds_since_epoch,
+        stats.message_start_time
+    );
+    assert_eq!(
+        info.duration.nanoseconds,
+        stats.message_end_time - stats.message_start_time
+    );
+    assert_eq!(info.relative_file_paths, ["rec_0.mcap"]);
+    assert_eq!(info.files.len(), 1);
+    assert_eq!(info.files[0].message_count, stats.message_count);
+    for (id, channel) in &summary.channels {
+        let topic = info
+            .topics_with_message_count
+            .iter()
+            .find(|t| t.topic_metadata.name == channel.topic)
+            .unwrap();
+        assert_eq!(
+            topic.message_count, stats.channel_message_counts[id],
+            "{}",
+            channel.topic
+        );
+        assert_eq!(
+            topic.topic_metadata.kind,
+            channel.schema.as_ref().unwrap().name
+        );
+    }
+    // The existing directory, named without the separator, is written as a folder again.
+    write_trajectory(&dir.join("rec"), s.frames().iter().map(|id| s.load(id))).unwrap();
+    assert!(std::fs::read(&mcap_file).unwrap() == bytes);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_folder_holding_a_bag_sndt_did_not_write_is_refused_and_kept() {
+    let dir = temp("foreign");
+    let s = split(1);
+    let frames = || s.frames().iter().map(|id| s.load(id));
+    // A one-file recording by another writer (the mcap crate's own library string), as
+    // `ros2 bag record` would leave it: rec/rec_0.mcap listed by rec/metadata.yaml.
+    let rec = dir.join("rec");
+    write_trajectory(&dir.join("mine/"), frames()).unwrap();
+    std::fs::create_dir_all(&rec).unwrap();
+    let yaml = std::fs::read_to_string(dir.join("mine/metadata.yaml")).unwrap();
+    std::fs::write(rec.join("metadata.yaml"), yaml.replace("mine_0", "rec_0")).unwrap();
+    let mut other = mcap::Writer::new(std::io::Cursor::new(Vec::new())).unwrap();
+    other.finish().unwrap();
+    let foreign = other.into_inner().into_inner();
+    std::fs::write(rec.join("rec_0.mcap"), &foreign).unwrap();
+    let err = format!("{:#}", write_trajectory(&rec, frames()).unwrap_err());
+    assert!(err.contains("a bag that sndt did not write"), "{err}");
+    assert_eq!(std::fs::read(rec.join("rec_0.mcap")).unwrap(), foreign);
+    // A split recording: its metadata.yaml lists other files.
+    let split_yaml = yaml.replace("- mine_0.mcap", "- rec_0.mcap\n  - rec_1.mcap");
+    std::fs::write(rec.join("metadata.yaml"), &split_yaml).unwrap();
+    let err = format!("{:#}", write_trajectory(&rec, frames()).unwrap_err());
+    assert!(err.contains("holds another bag"), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(rec.join("metadata.yaml")).unwrap(),
+        split_yaml
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

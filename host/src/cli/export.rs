@@ -33,8 +33,9 @@ pub struct ExportArgs {
     /// Output PLY file.
     #[arg(long, required_unless_present = "mcap")]
     pub ply: Option<PathBuf>,
-    /// Output ROS 2 bag (MCAP): /sndt/map/points (PointCloud2), /sndt/map/gaussians
-    /// (MarkerArray), /tf_static.
+    /// Output ROS 2 bag (rosbag2, MCAP): /sndt/map/points (PointCloud2), /sndt/map/gaussians
+    /// (MarkerArray), /tf_static (latched). A path ending in `/` (or an existing directory)
+    /// is written as a bag folder: `DIR/<DIR's name>_0.mcap` and `DIR/metadata.yaml`.
     #[arg(long)]
     pub mcap: Option<PathBuf>,
     /// With a dataset and --mcap: also write the map every N frames (of those --every

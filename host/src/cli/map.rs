@@ -49,8 +49,10 @@ pub struct MapArgs {
     /// Also write each trajectory's map snapshot to `<out>/maps/<scene>_<cam>.sndt`.
     #[arg(long)]
     pub save_maps: bool,
-    /// Also write each trajectory's map as a ROS 2 bag (PointCloud2, MarkerArray,
-    /// /tf_static): this file for one trajectory, `<stem>_<scene>_<cam>.mcap` for several.
+    /// Also write each trajectory's map as a ROS 2 bag (rosbag2, MCAP: PointCloud2,
+    /// MarkerArray, /tf_static): this file for one trajectory, `<stem>_<scene>_<cam>.mcap` for
+    /// several. A path ending in `/` (or an existing directory) is a bag folder
+    /// (`DIR/<DIR's name>_0.mcap` and `DIR/metadata.yaml`; `DIR_<scene>_<cam>/` for several).
     #[arg(long)]
     pub mcap: Option<PathBuf>,
     /// With --mcap: also write the map every N frames (of those --every keeps), so the bag

@@ -32,9 +32,11 @@ pub struct SynthArgs {
     /// Output directory (the dataset root) of the prepared layout.
     #[arg(long, required_unless_present = "mcap")]
     pub out: Option<PathBuf>,
-    /// Also (or only) write each trajectory as a ROS 2 bag: this file for one scene,
-    /// `<stem>_<scene>.mcap` beside it for several (16UC1 depth, mono8 labels, camera info,
-    /// /tf and /tf_static).
+    /// Also (or only) write each trajectory as a ROS 2 bag (rosbag2, MCAP: 16UC1 depth, mono8
+    /// labels, camera info, /tf and latched /tf_static): this file for one scene,
+    /// `<stem>_<scene>.mcap` beside it for several. A path ending in `/` (or an existing
+    /// directory) is a bag folder (`DIR/<DIR's name>_0.mcap` and `DIR/metadata.yaml`;
+    /// `DIR_<scene>/` for several).
     #[arg(long)]
     pub mcap: Option<PathBuf>,
     /// What to generate: separate rooms, or a walk through the building floor (scene
@@ -132,7 +134,7 @@ pub fn run(a: &SynthArgs) -> Result<()> {
 }
 
 /// Writes each trajectory of `split` as a ROS 2 bag: `path` for one, `<stem>_<scene>.mcap`
-/// for several.
+/// (or for a bag folder `path`, the folder `<dir>_<scene>/`) for several.
 pub fn write_bags(split: &Synthetic, path: &Path) -> Result<Vec<PathBuf>> {
     let trajectories = split.trajectories();
     let mut written = Vec::new();
@@ -140,10 +142,7 @@ pub fn write_bags(split: &Synthetic, path: &Path) -> Result<Vec<PathBuf>> {
         let file = if trajectories.len() == 1 {
             path.to_path_buf()
         } else {
-            let stem = path
-                .file_stem()
-                .map_or("synthetic".into(), |s| s.to_string_lossy());
-            path.with_file_name(format!("{stem}_{}.mcap", name.replace('/', "_")))
+            crate::output::ros::write::sibling_bag(path, name, "synthetic")
         };
         let n = crate::output::ros::write::write_trajectory(
             &file,

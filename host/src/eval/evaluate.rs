@@ -47,7 +47,8 @@ pub struct EvalOptions {
     /// (`<dir>/<scene>_<cam>.sndt`, readable by `sndt export`).
     pub save_maps: Option<PathBuf>,
     /// ROS 2 bag of each trajectory's map ([`crate::output::ros::export`]): this file for one
-    /// trajectory, `<stem>_<scene>_<cam>.mcap` beside it for several.
+    /// trajectory, `<stem>_<scene>_<cam>.mcap` beside it for several; a folder path gives
+    /// bag folders ([`crate::output::ros::write::BagWriter`]).
     pub mcap: Option<PathBuf>,
     /// With `mcap`: write the map after every this many frames of the trajectory as well
     /// as at the end (`sndt map --mcap-interval`).
@@ -661,13 +662,11 @@ fn write_growing(
 }
 
 /// The bag of trajectory `name`: `path` itself when it is the only one, else
-/// `<stem>_<scene>_<cam>.mcap` beside it.
+/// `<stem>_<scene>_<cam>.mcap` beside it (for a bag folder `path`, the folder
+/// `<dir>_<scene>_<cam>/`).
 pub fn bag_path(path: &Path, name: &str, single: bool) -> PathBuf {
     if single {
         return path.to_path_buf();
     }
-    let stem = path
-        .file_stem()
-        .map_or("map".into(), |s| s.to_string_lossy());
-    path.with_file_name(format!("{stem}_{}.mcap", name.replace('/', "_")))
+    crate::output::ros::write::sibling_bag(path, name, "map")
 }

@@ -7,9 +7,9 @@ use super::mcap_read::{Location, McapParts, ScannedMessage};
 use super::msgs::{CameraInfo, Header, Image, Odometry, Pose, PoseStamped, TfMessage};
 use super::stamp_text;
 use super::tf::TfBuffer;
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, Context, Result};
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Message type names.
 pub const IMAGE: &str = "sensor_msgs/msg/Image";
@@ -104,7 +104,7 @@ impl BagIndex {
     /// (`metadata.yaml` and its split `.mcap` files, read in order).
     pub fn open(path: &Path) -> Result<BagIndex> {
         let files = if path.is_dir() {
-            folder_files(path)?
+            super::metadata::bag_files(path)?
         } else {
             vec![path.to_path_buf()]
         };
@@ -221,18 +221,4 @@ pub fn check_layout(m: &Image) -> Result<(), String> {
         ));
     }
     Ok(())
-}
-
-/// The `.mcap` files of a rosbag2 folder, in the order `metadata.yaml` lists them.
-fn folder_files(dir: &Path) -> Result<Vec<PathBuf>> {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-        .with_context(|| format!("reading {}", dir.display()))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e == "mcap"))
-        .collect();
-    files.sort();
-    if files.is_empty() {
-        bail!("{}: a folder without .mcap files", dir.display());
-    }
-    Ok(files)
 }

@@ -8,6 +8,8 @@
 //! - [`index`]: one pass over a recording: topics, transforms, camera infos, poses, and
 //!   where each image is;
 //! - [`tf`]: a transform buffer (`/tf`, `/tf_static`) that answers camera poses;
+//! - [`metadata`]: rosbag2's bag folder (`metadata.yaml` beside the MCAP files it lists)
+//!   and the QoS profiles rosbag2 records per topic;
 //! - [`bag`]: the bag reader, which pairs depth with labels, camera info and a pose and
 //!   yields [`Frame`](crate::dataset::Frame)s.
 //!
@@ -16,6 +18,7 @@
 pub mod bag;
 pub mod index;
 pub mod mcap_read;
+pub mod metadata;
 pub mod msgs;
 pub mod tf;
 

@@ -1,9 +1,14 @@
-//! Writing ROS 2 recordings: an MCAP writer of CDR messages with `ros2msg` schemas (as
-//! `ros2 bag record` writes them), and a synthetic trajectory as such a bag.
+//! Writing ROS 2 recordings: rosbag2 bags as `ros2 bag record` writes them on Humble (MCAP
+//! with the `ros2` profile, CDR messages, `ros2msg` schemas, the recorded QoS per topic),
+//! as one `.mcap` file or as a bag folder, and a synthetic trajectory as such a bag.
 
-use crate::atomic::{commit, temporary};
+use crate::atomic::{commit, temporary, write_bytes};
 use crate::dataset::frame::{Frame, Rays};
 use crate::dataset::prepared::{depth_to_mm, Extrinsics};
+use crate::dataset::ros::metadata::{
+    serialize_qos, BagInfo, MetadataFile, OfferedQos, QosProfile, TopicMetadata,
+    TopicWithMessageCount, METADATA_FILE, ROS_DISTRO,
+};
 use crate::dataset::ros::msgs::{
     self, CameraInfo, Header, Image, TfMessage, Time, Transform, TransformStamped,
 };
@@ -14,64 +19,233 @@ use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
-/// An MCAP file of ROS 2 messages, written into a temporary file that [`BagWriter::finish`]
-/// syncs and renames over the target (a crash never leaves a truncated bag in its place).
+/// A rosbag2 bag being written: an MCAP file of ROS 2 messages, or with a folder path (one
+/// ending in `/`, or an existing directory) a bag folder `DIR/<DIR's name>_0.mcap` plus
+/// `DIR/metadata.yaml`, which is what `ros2 bag record -s mcap` leaves. The MCAP file is
+/// written into a temporary file that [`BagWriter::finish`] syncs and renames over the
+/// target (a crash never leaves a truncated bag in its place), and `metadata.yaml` only
+/// after it.
 pub struct BagWriter {
     writer: mcap::Writer<BufWriter<File>>,
-    channels: HashMap<String, u16>,
+    /// Topic name -> (channel id, index into `topics`).
+    channels: HashMap<String, (u16, usize)>,
+    /// The declared topics with their message counts, in declaration order.
+    topics: Vec<TopicWithMessageCount>,
+    /// First and last log time written, ns.
+    span: Option<(u64, u64)>,
     sequence: u32,
     tmp: PathBuf,
     path: PathBuf,
+    /// The bag folder, when writing one.
+    folder: Option<PathBuf>,
+}
+
+/// Whether `path` names a bag folder rather than an `.mcap` file: it ends in a path
+/// separator or is an existing directory.
+///
+/// ```
+/// use sndt_host::output::ros::write::is_folder;
+/// use std::path::Path;
+/// assert!(is_folder(Path::new("out/robot/")));
+/// assert!(!is_folder(Path::new("out/robot.mcap")));
+/// ```
+pub fn is_folder(path: &Path) -> bool {
+    let text = path.as_os_str().to_string_lossy();
+    text.ends_with('/') || text.ends_with(std::path::MAIN_SEPARATOR) || path.is_dir()
+}
+
+/// The bag of one of several trajectories: `<stem>_<name>.mcap` beside an `.mcap` path, or
+/// the folder `<dir>_<name>/` beside a folder path (so each trajectory is a bag of the same
+/// form). `fallback` is the stem for a path without one.
+///
+/// ```
+/// use sndt_host::output::ros::write::sibling_bag;
+/// use std::path::Path;
+/// let file = sibling_bag(Path::new("out/map.mcap"), "synth_00/cam_00", "map");
+/// assert_eq!(file, Path::new("out/map_synth_00_cam_00.mcap"));
+/// let folder = sibling_bag(Path::new("out/bags/"), "synth_00/cam_00", "map");
+/// assert_eq!(folder, Path::new("out/bags_synth_00_cam_00/"));
+/// assert!(sndt_host::output::ros::write::is_folder(&folder));
+/// ```
+pub fn sibling_bag(path: &Path, name: &str, fallback: &str) -> PathBuf {
+    let name = name.replace('/', "_");
+    if is_folder(path) {
+        let dir = path.components().as_path();
+        let stem = dir
+            .file_name()
+            .map_or(fallback.into(), |s| s.to_string_lossy());
+        let mut out = dir
+            .with_file_name(format!("{stem}_{name}"))
+            .into_os_string();
+        out.push("/");
+        return PathBuf::from(out);
+    }
+    let stem = path
+        .file_stem()
+        .map_or(fallback.into(), |s| s.to_string_lossy());
+    path.with_file_name(format!("{stem}_{name}.mcap"))
+}
+
+/// The MCAP file of the bag `path` and, for a folder, the folder.
+fn bag_layout(path: &Path) -> Result<(PathBuf, Option<PathBuf>)> {
+    if !is_folder(path) {
+        return Ok((path.to_path_buf(), None));
+    }
+    // `components` drops the trailing separator; a folder named `.` takes its real name.
+    let dir = path.components().as_path().to_path_buf();
+    let name = match dir.file_name() {
+        Some(name) => name.to_os_string(),
+        None => std::fs::canonicalize(&dir)
+            .ok()
+            .and_then(|d| d.file_name().map(std::ffi::OsStr::to_os_string))
+            .with_context(|| format!("{}: the bag folder needs a name", path.display()))?,
+    };
+    let file = dir.join(format!("{}_0.mcap", name.to_string_lossy()));
+    refuse_foreign_bag(&dir, &file)?;
+    Ok((file, Some(dir)))
+}
+
+/// Refuses a bag folder that holds a bag sndt did not write, as rosbag2 refuses an existing
+/// folder: a recording given as the output by mistake (`sndt map rec/ --mcap rec/`) would
+/// otherwise be overwritten. sndt's own folder may be written again.
+fn refuse_foreign_bag(dir: &Path, file: &Path) -> Result<()> {
+    let name = file.file_name().map(|n| n.to_string_lossy().to_string());
+    if dir.join(METADATA_FILE).exists() {
+        let listed =
+            MetadataFile::read(dir).map(|m| m.rosbag2_bagfile_information.relative_file_paths);
+        if !matches!(&listed, Ok(files) if files.len() == 1 && Some(&files[0]) == name.as_ref()) {
+            bail!(
+                "{}: holds another bag ({METADATA_FILE} lists other files); sndt writes a bag \
+                 folder only where none is or where it wrote one",
+                dir.display()
+            );
+        }
+    }
+    if file.exists() && !written_by_sndt(file) {
+        bail!(
+            "{}: a bag that sndt did not write; give --mcap another folder",
+            file.display()
+        );
+    }
+    Ok(())
+}
+
+/// Whether the MCAP header of `file` names sndt as the writing library.
+fn written_by_sndt(file: &Path) -> bool {
+    use std::io::Read;
+    let mut head = Vec::new();
+    // The header is the first record: profile and library strings, well within 4 KiB.
+    let read = File::open(file).and_then(|f| f.take(4096).read_to_end(&mut head));
+    if read.is_err() {
+        return false;
+    }
+    let first = mcap::read::LinearReader::new_with_options(
+        &head,
+        mcap::read::Options::IgnoreEndMagic.into(),
+    )
+    .ok()
+    .and_then(|mut records| records.next());
+    matches!(first, Some(Ok(mcap::records::Record::Header(h))) if h.library.starts_with("sndt "))
 }
 
 impl BagWriter {
-    /// Starts writing `path` (its directory is created).
+    /// Starts writing the bag `path`: an `.mcap` file, or a bag folder when `path` ends in
+    /// `/` or is an existing directory (see [`BagWriter`]). Directories are created.
     pub fn create(path: &Path) -> Result<BagWriter> {
-        let tmp = temporary(path)?;
+        let (file_path, folder) = bag_layout(path)?;
+        let tmp = temporary(&file_path)?;
         let file = File::create(&tmp).with_context(|| format!("creating {}", path.display()))?;
-        let writer = mcap::Writer::new(BufWriter::new(file))
+        // As rosbag2's MCAP storage plugin: the `ros2` profile, which readers such as the
+        // `rosbags` library require, and the distribution in a `rosbag2` metadata record.
+        let library = format!(
+            "sndt {} ({})",
+            env!("CARGO_PKG_VERSION"),
+            mcap::LIBRARY_IDENTIFIER
+        );
+        let mut writer = mcap::WriteOptions::new()
+            .profile("ros2")
+            .library(library)
+            .create(BufWriter::new(file))
             .with_context(|| format!("writing {}", path.display()))?;
+        writer.write_metadata(&mcap::records::Metadata {
+            name: "rosbag2".into(),
+            metadata: BTreeMap::from([("ROS_DISTRO".into(), ROS_DISTRO.into())]),
+        })?;
         Ok(BagWriter {
             writer,
             channels: HashMap::new(),
+            topics: Vec::new(),
+            span: None,
             sequence: 0,
             tmp,
-            path: path.to_path_buf(),
+            path: file_path,
+            folder,
         })
     }
 
-    /// Declares `topic` with the message type `(schema name, ros2msg definition)`.
-    pub fn add_topic(&mut self, topic: &str, (name, definition): (&str, String)) -> Result<()> {
+    /// Declares `topic` with the message type `(schema name, ros2msg definition)` and the
+    /// QoS its publisher would offer ([`QosProfile::for_topic`]: `/tf_static` latched).
+    pub fn add_topic(&mut self, topic: &str, kind: (&str, String)) -> Result<()> {
+        self.add_topic_with_qos(topic, kind, QosProfile::for_topic(topic))
+    }
+
+    /// Declares `topic` with the message type `(schema name, ros2msg definition)`, recorded as
+    /// offered with `qos` (the channel's `offered_qos_profiles`, which `ros2 bag play` offers
+    /// again).
+    pub fn add_topic_with_qos(
+        &mut self,
+        topic: &str,
+        (name, definition): (&str, String),
+        qos: QosProfile,
+    ) -> Result<()> {
+        if self.channels.contains_key(topic) {
+            bail!("{topic}: topic declared twice");
+        }
+        let profiles = serialize_qos(&[qos])?;
         let schema = self
             .writer
             .add_schema(name, "ros2msg", definition.as_bytes())?;
-        let channel = self
-            .writer
-            .add_channel(schema, topic, "cdr", &BTreeMap::new())?;
-        self.channels.insert(topic.to_string(), channel);
+        let metadata = BTreeMap::from([("offered_qos_profiles".to_string(), profiles.clone())]);
+        let channel = self.writer.add_channel(schema, topic, "cdr", &metadata)?;
+        self.channels
+            .insert(topic.to_string(), (channel, self.topics.len()));
+        self.topics.push(TopicWithMessageCount {
+            topic_metadata: TopicMetadata {
+                name: topic.into(),
+                kind: name.into(),
+                serialization_format: "cdr".into(),
+                offered_qos_profiles: OfferedQos::Text(profiles),
+                type_description_hash: None,
+            },
+            message_count: 0,
+        });
         Ok(())
     }
 
     /// Writes `msg` (CDR, little-endian) on `topic` at `stamp` (log and publish time).
     pub fn write<T: Serialize>(&mut self, topic: &str, stamp: Time, msg: &T) -> Result<()> {
-        let channel_id = *self
+        let (channel_id, index) = *self
             .channels
             .get(topic)
             .ok_or_else(|| anyhow!("{topic}: topic not declared"))?;
         let data = cdr::serialize::<_, _, cdr::CdrLe>(msg, cdr::Infinite)
             .map_err(|e| anyhow!("{topic}: encoding CDR: {e}"))?;
         self.sequence += 1;
+        let t = stamp.nanos();
         let header = mcap::records::MessageHeader {
             channel_id,
             sequence: self.sequence,
-            log_time: stamp.nanos(),
-            publish_time: stamp.nanos(),
+            log_time: t,
+            publish_time: t,
         };
         self.writer.write_to_known_channel(&header, &data)?;
+        self.topics[index].message_count += 1;
+        self.span = Some(self.span.map_or((t, t), |(a, b)| (a.min(t), b.max(t))));
         Ok(())
     }
 
-    /// Finishes the file (summary, footer) and puts it in place.
+    /// Finishes the MCAP file (summary, footer) and puts it in place; for a bag folder, then
+    /// writes its `metadata.yaml`.
     pub fn finish(mut self) -> Result<()> {
         let shown = self.path.display().to_string();
         self.writer
@@ -81,7 +255,21 @@ impl BagWriter {
             .into_inner()
             .into_inner()
             .map_err(|e| anyhow!("writing {shown}: {}", e.error()))?;
-        commit(&self.tmp, &self.path)
+        commit(&self.tmp, &self.path)?;
+        let Some(dir) = &self.folder else {
+            return Ok(());
+        };
+        let file = self.path.file_name().map(|n| n.to_string_lossy());
+        let info = BagInfo::single_mcap(
+            &file.unwrap_or_default(),
+            self.topics,
+            self.span.unwrap_or((0, 0)),
+        );
+        let yaml = MetadataFile {
+            rosbag2_bagfile_information: info,
+        }
+        .to_yaml()?;
+        write_bytes(&dir.join(METADATA_FILE), yaml)
     }
 }
 
