@@ -9,6 +9,7 @@ use crate::dataset::synthetic::{floor, write_split, DepthNoise, SynthOptions, Sy
 use crate::eval::label_stats::LabelStats;
 use crate::output::picture;
 use crate::output::progress::progress;
+use crate::output::ros::write::ChunkCompression;
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -39,6 +40,9 @@ pub struct SynthArgs {
     /// `DIR_<scene>/` for several).
     #[arg(long)]
     pub mcap: Option<PathBuf>,
+    /// Compression of the bags' chunks (`none` as `ros2 bag record` writes by default).
+    #[arg(long, value_enum, default_value_t = ChunkCompression::Zstd, requires = "mcap")]
+    pub mcap_compression: ChunkCompression,
     /// What to generate: separate rooms, or a walk through the building floor (scene
     /// `synth_floor`, trajectory `cam_NN` of walk NN + 1).
     #[arg(long, value_enum, default_value = "rooms")]
@@ -102,7 +106,7 @@ pub fn run(a: &SynthArgs) -> Result<()> {
     };
     let split = Synthetic::new(options)?;
     if let Some(path) = &a.mcap {
-        write_bags(&split, path)?;
+        write_bags(&split, path, a.mcap_compression)?;
     }
     let Some(out) = &a.out else {
         return Ok(());
@@ -135,7 +139,11 @@ pub fn run(a: &SynthArgs) -> Result<()> {
 
 /// Writes each trajectory of `split` as a ROS 2 bag: `path` for one, `<stem>_<scene>.mcap`
 /// (or for a bag folder `path`, the folder `<dir>_<scene>/`) for several.
-pub fn write_bags(split: &Synthetic, path: &Path) -> Result<Vec<PathBuf>> {
+pub fn write_bags(
+    split: &Synthetic,
+    path: &Path,
+    compression: ChunkCompression,
+) -> Result<Vec<PathBuf>> {
     let trajectories = split.trajectories();
     let mut written = Vec::new();
     for (name, ids) in &trajectories {
@@ -144,9 +152,10 @@ pub fn write_bags(split: &Synthetic, path: &Path) -> Result<Vec<PathBuf>> {
         } else {
             crate::output::ros::write::sibling_bag(path, name, "synthetic")
         };
-        let n = crate::output::ros::write::write_trajectory(
+        let n = crate::output::ros::write::write_trajectory_compressed(
             &file,
             ids.iter().map(|id| split.load(id)),
+            compression,
         )?;
         println!("wrote {} ({n} frames of {name})", file.display());
         written.push(file);

@@ -148,10 +148,39 @@ fn written_by_sndt(file: &Path) -> bool {
     matches!(first, Some(Ok(mcap::records::Record::Header(h))) if h.library.starts_with("sndt "))
 }
 
+/// How a bag's chunks are compressed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum ChunkCompression {
+    /// zstd (the default: small files; rosbag2 reads it).
+    #[default]
+    Zstd,
+    /// lz4.
+    Lz4,
+    /// None, as `ros2 bag record` writes by default.
+    None,
+}
+
+impl ChunkCompression {
+    /// The mcap crate's setting.
+    fn mcap(self) -> Option<mcap::Compression> {
+        match self {
+            ChunkCompression::Zstd => Some(mcap::Compression::Zstd),
+            ChunkCompression::Lz4 => Some(mcap::Compression::Lz4),
+            ChunkCompression::None => None,
+        }
+    }
+}
+
 impl BagWriter {
-    /// Starts writing the bag `path`: an `.mcap` file, or a bag folder when `path` ends in
-    /// `/` or is an existing directory (see [`BagWriter`]). Directories are created.
+    /// Starts writing the bag `path` with zstd chunks: an `.mcap` file, or a bag folder
+    /// when `path` ends in `/` or is an existing directory (see [`BagWriter`]).
+    /// Directories are created.
     pub fn create(path: &Path) -> Result<BagWriter> {
+        BagWriter::create_compressed(path, ChunkCompression::Zstd)
+    }
+
+    /// [`BagWriter::create`] with the chunks compressed as `compression` says.
+    pub fn create_compressed(path: &Path, compression: ChunkCompression) -> Result<BagWriter> {
         let (file_path, folder) = bag_layout(path)?;
         let tmp = temporary(&file_path)?;
         let file = File::create(&tmp).with_context(|| format!("creating {}", path.display()))?;
@@ -163,6 +192,7 @@ impl BagWriter {
             mcap::LIBRARY_IDENTIFIER
         );
         let mut writer = mcap::WriteOptions::new()
+            .compression(compression.mcap())
             .profile("ros2")
             .library(library)
             .create(BufWriter::new(file))
@@ -338,8 +368,17 @@ pub fn camera_transform(pose: &sndt_core::Isometry3<f32>) -> Transform {
 /// and on `/tf` the body's pose in the world; `/tf_static` fixes the camera on the body
 /// (identity, so the chain gives the frame's pose exactly).
 pub fn write_trajectory(path: &Path, frames: impl Iterator<Item = Result<Frame>>) -> Result<usize> {
+    write_trajectory_compressed(path, frames, ChunkCompression::Zstd)
+}
+
+/// [`write_trajectory`] with the chunks compressed as `compression` says.
+pub fn write_trajectory_compressed(
+    path: &Path,
+    frames: impl Iterator<Item = Result<Frame>>,
+    compression: ChunkCompression,
+) -> Result<usize> {
     use names::*;
-    let mut bag = BagWriter::create(path)?;
+    let mut bag = BagWriter::create_compressed(path, compression)?;
     bag.add_topic(DEPTH, msgs::definitions::image())?;
     bag.add_topic(LABELS, msgs::definitions::image())?;
     bag.add_topic(CAMERA_INFO, msgs::definitions::camera_info())?;
