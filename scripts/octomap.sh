@@ -2,8 +2,9 @@
 # OctoMap export against liboctomap itself: maps a small synthetic trajectory, exports its
 # occupancy layer as a binary OcTree (.bt), a ColorOcTree (.ot) and an
 # octomap_msgs/Octomap message in a map bag, reads each back with Debian's liboctomap-dev
-# (scripts/octomap/check_octomap.cpp lists every leaf) and queries sndt's own map at every
-# leaf's centre (host/examples/octomap_check.rs): every leaf must agree with sndt's
+# (scripts/octomap/check_octomap.cpp lists every leaf, and has liboctomap encode the leaves
+# it read into a tree of its own, which must be the file's bytes) and queries sndt's own map
+# at every leaf's centre (host/examples/octomap_check.rs): every leaf must agree with sndt's
 # occupancy there (and for the .ot with its log-odds and class colour), and the leaves must
 # be as many as sndt's known voxels. The bag's message is decoded by the Python mcap
 # packages (in target/ros-venv, as scripts/ros.sh installs them) and must carry the .bt's
@@ -44,7 +45,8 @@ if ! "$VENV/bin/python" -c 'import mcap, mcap_ros2' 2>/dev/null; then
     # The versions scripts/ros.sh pins.
     "$VENV/bin/pip" install -q 'mcap==1.*' 'mcap-ros2-support==0.5.*'
 fi
-echo "present"
+"$VENV/bin/python" -c 'import mcap, mcap_ros2; print("mcap", mcap.__version__, "mcap-ros2-support", mcap_ros2.__version__)'
+
 
 step "the checker: check_octomap.cpp against liboctomap ($CHECK)"
 mkdir -p "$(dirname "$CHECK")"
@@ -70,14 +72,18 @@ step "the bag's /octomap_binary, decoded by Python: the .bt's tree"
 "$VENV/bin/python" scripts/octomap/bag_octomap.py "$WORK/map.mcap" "$WORK/map.bt" "$CELL" \
     "$WORK/msg.data"
 
-step "liboctomap reads each, sndt queries its map at every leaf"
+step "liboctomap reads each and re-encodes its leaves; sndt queries its map at every leaf"
 for kind in bt ot msg; do
     case $kind in
     bt) file="$WORK/map.bt" ;;
     ot) file="$WORK/map.ot" ;;
     msg) file="$WORK/msg.data" ;;
     esac
-    "$CHECK" "$kind" "$file" "$CELL" "$WORK/leaves-$kind.txt"
+    # liboctomap's progress notes go to stderr without line ends: shown only on failure.
+    if ! "$CHECK" "$kind" "$file" "$CELL" "$WORK/leaves-$kind.txt" 2>"$WORK/check-$kind.err"; then
+        cat "$WORK/check-$kind.err" >&2
+        exit 1
+    fi
     "$COMPARE" "$map" "$WORK/leaves-$kind.txt"
 done
 echo "octomap: ok"

@@ -6,17 +6,23 @@
 //   check_octomap msg FILE RES OUT   the data of an octomap_msgs/Octomap (binary, OcTree), read
 //                                    as octomap_msgs' binaryMsgToMap does: OcTree(RES).readBinaryData
 //
-// Fails unless the file reads, the resolution is RES and the tree is 16 levels deep. OUT
-// gets one line per leaf: "x y z depth occupied log_odds" (centre in metres, depth 16 is
-// one voxel, occupied per isNodeOccupied), then " r g b" for a ColorOcTree. Prints a
-// one-line summary.
+// Fails unless the file reads, the resolution is RES, the tree is 16 levels deep and
+// liboctomap, given the leaves it read, encodes them into the very bytes of the file: a new
+// tree of the same kind with each leaf set by its key (lazily, so nothing is pruned, as sndt
+// does not prune), inner nodes filled by updateInnerOccupancy (for a ColorOcTree: largest
+// log-odds, mean colour), written by writeBinaryData (bt, msg) or writeData (ot). OUT gets
+// one line per leaf: "x y z depth occupied log_odds" (centre in metres, depth 16 is one
+// voxel, occupied per isNodeOccupied), then " r g b" for a ColorOcTree. Prints a one-line
+// summary.
 #include <octomap/ColorOcTree.h>
 #include <octomap/OcTree.h>
 
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <memory>
+#include <sstream>
 #include <string>
 
 namespace {
@@ -33,9 +39,52 @@ void color(std::FILE* out, const octomap::ColorOcTreeNode& n) {
     std::fprintf(out, " %u %u %u", unsigned(c.r), unsigned(c.g), unsigned(c.b));
 }
 
+void copy_color(octomap::OcTreeNode&, const octomap::OcTreeNode&) {}
+
+void copy_color(octomap::ColorOcTreeNode& to, const octomap::ColorOcTreeNode& from) {
+    to.setColor(from.getColor());
+}
+
+void write_tree(const octomap::OcTree& tree, std::ostream& s) { tree.writeBinaryData(s); }
+
+void write_tree(const octomap::ColorOcTree& tree, std::ostream& s) { tree.writeData(s); }
+
+// liboctomap's own encoding of the leaves of `tree` (see the top of the file).
+template <class Tree>
+std::string encode_again(const Tree& tree) {
+    Tree fresh(tree.getResolution());
+    for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+        auto* node = fresh.setNodeValue(it.getKey(), it->getLogOdds(), true);
+        // setNodeValue clamps to OctoMap's default thresholds; keep the value as read.
+        node->setLogOdds(it->getLogOdds());
+        copy_color(*node, *it);
+    }
+    fresh.updateInnerOccupancy();
+    std::ostringstream s;
+    write_tree(fresh, s);
+    return s.str();
+}
+
+// The tree bytes of a file: after the header's "data" line, or all of it (a message's data).
+std::string tree_bytes(const std::string& file, bool header) {
+    std::ifstream in(file, std::ios_base::binary);
+    std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (!header) {
+        return all;
+    }
+    const size_t at = all.find("\ndata\n");
+    return at == std::string::npos ? std::string() : all.substr(at + 6);
+}
+
 // Writes the leaves of `tree` to `path` and prints the summary; 0 when all is well.
 template <class Tree>
-int dump(const Tree& tree, double res, const std::string& what, const std::string& path) {
+int dump(const Tree& tree, double res, const std::string& what, const std::string& path,
+         const std::string& bytes) {
+    const std::string again = encode_again(tree);
+    if (again != bytes) {
+        return fail(what + ": liboctomap encodes these leaves into " + std::to_string(again.size()) +
+                    " other bytes than the file's " + std::to_string(bytes.size()));
+    }
     if (tree.getResolution() != res) {
         return fail(what + ": resolution " + std::to_string(tree.getResolution()) +
                     ", expected " + std::to_string(res));
@@ -64,9 +113,9 @@ int dump(const Tree& tree, double res, const std::string& what, const std::strin
         return fail("cannot write " + path);
     }
     std::printf("liboctomap %s: %s, res %g, depth 16, %zu nodes, %zu leaves (%zu occupied, %zu free), "
-                "leaf depths %u..%u\n",
+                "leaf depths %u..%u; liboctomap's encoding of them = the file's %zu bytes\n",
                 what.c_str(), tree.getTreeType().c_str(), tree.getResolution(), tree.size(), leaves,
-                occupied, leaves - occupied, leaves ? min_depth : 0, max_depth);
+                occupied, leaves - occupied, leaves ? min_depth : 0, max_depth, bytes.size());
     return 0;
 }
 
@@ -85,7 +134,7 @@ int main(int argc, char** argv) {
         if (!tree.readBinary(file)) {
             return fail(what + ": OcTree::readBinary failed");
         }
-        return dump(tree, res, what, out);
+        return dump(tree, res, what, out, tree_bytes(file, true));
     }
     if (mode == "ot") {
         std::unique_ptr<octomap::AbstractOcTree> tree(octomap::AbstractOcTree::read(file));
@@ -96,7 +145,7 @@ int main(int argc, char** argv) {
         if (!color_tree) {
             return fail(what + ": a " + tree->getTreeType() + ", not a ColorOcTree");
         }
-        return dump(*color_tree, res, what, out);
+        return dump(*color_tree, res, what, out, tree_bytes(file, true));
     }
     if (mode == "msg") {
         std::ifstream in(file, std::ios_base::binary);
@@ -113,7 +162,7 @@ int main(int argc, char** argv) {
         if (in.peek() != std::ifstream::traits_type::eof()) {
             return fail(what + ": bytes after the tree");
         }
-        return dump(tree, res, what, out);
+        return dump(tree, res, what, out, tree_bytes(file, false));
     }
     return fail("unknown mode " + mode);
 }
