@@ -2,8 +2,9 @@
 # The whole test suite: formatting, lints, docs, the no_std build for Cortex-M4F, the
 # firmware in QEMU and the core's tests on aarch64 (qemu-aarch64) with one snapshot CRC on
 # all three architectures, the C API (header drift, C and C++ programs, C firmware in
-# QEMU), ROS 2 bags against the Python mcap packages, and every test (unit, property, integration, doc). Installs what it needs;
-# idempotent.
+# QEMU), ROS 2 bags against the Python mcap packages, OctoMap exports read back by
+# liboctomap and compared voxel by voxel, and every test (unit, property, integration, doc).
+# Installs what it needs; idempotent.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -37,6 +38,9 @@ bash scripts/c.sh
 
 step "ROS 2 bags: a bag written by Python maps like the prepared layout; map bags read back by Python"
 bash scripts/ros.sh
+
+step "OctoMap: .bt, .ot and the map bag's message read by liboctomap, every leaf against sndt's map"
+bash scripts/octomap.sh
 
 step "aarch64: sndt-core tests (unit, property, doc) and the CRC check under qemu-aarch64"
 bash scripts/aarch64.sh

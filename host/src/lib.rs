@@ -17,7 +17,7 @@
 //! | 2 | [`dataset`] | readers: one [`Frame`](dataset::Frame) type for synthetic scenes, the prepared layout, raw Hypersim, `.npy` predictions and ROS 2 bags ([`dataset::ros`]) |
 //! | 3 | [`semantic_map`], [`global_map`] | the [`SemanticMap`](semantic_map::SemanticMap) trait every mapper implements, and the core's side of it; the host map that grows, and a device map spilling into it |
 //! | 4 | [`reference`](mod@reference), [`baselines`] | the other mappers: S-NDT in plain `f64` (the core's test oracle); S-BKI and OS-BKI |
-//! | 5 | [`output`] | writers: PNG pictures, SVG charts, PLY, point files, ROS 2 bags of frames and maps ([`output::ros`]), progress bars |
+//! | 5 | [`output`] | writers: PNG pictures, SVG charts, PLY, point files, OctoMap trees ([`output::octomap`]), ROS 2 bags of frames and maps ([`output::ros`]), progress bars |
 //! | 6 | [`eval`], [`embedded`] | the jobs: the paper's metrics, the evaluation loop, the experiment, core-vs-reference; memory budget and the firmware's test vector |
 //! | 7 | [`cli`] | the `sndt` command line (the only user of clap), one file per command |
 //!

@@ -14,6 +14,7 @@ mod gaussian;
 mod hypersim;
 mod layout;
 mod merge;
+mod octomap;
 mod permutation;
 mod points_export;
 mod prepared;

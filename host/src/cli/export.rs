@@ -1,7 +1,9 @@
 //! `sndt export`: a map's Gaussians as a PLY (points or ellipsoids) for
-//! MeshLab/CloudCompare and / or as a ROS 2 bag (MCAP: point cloud and ellipsoid markers)
-//! for Foxglove and RViz, from a saved snapshot or from mapping a dataset's first
-//! trajectory (then, with `--mcap-interval N`, the bag holds the map as it grows).
+//! MeshLab/CloudCompare, its occupancy layer as an OctoMap (`.bt` / `.ot`) for MoveIt,
+//! octomap_server and octovis, and / or both as a ROS 2 bag (MCAP: point cloud, ellipsoid
+//! markers, OctoMap message) for Foxglove and RViz, from a saved snapshot or from mapping a
+//! dataset's first trajectory (then, with `--mcap-interval N`, the bag holds the map as it
+//! grows).
 
 use crate::cli::labels::{check_labels, LabelArg};
 use crate::cli::open_args::{EveryArgs, OpenArgs};
@@ -11,6 +13,7 @@ use crate::dataset::ros::msgs::Time;
 use crate::dataset::source::usable_frames;
 use crate::eval::evaluate::load_snapshot;
 use crate::output::export::{ellipsoids, write_ellipsoids, write_points};
+use crate::output::octomap::{write_octomap, OctoFormat, OctoMap};
 use crate::output::progress::progress;
 use crate::output::ros::export::MapBag;
 use crate::output::ros::write::frame_time;
@@ -23,6 +26,7 @@ use std::path::{Path, PathBuf};
 #[derive(clap::Args, Clone, Debug)]
 #[command(after_help = "Examples:
   sndt export out/map/maps/synth_00_living_cam_00.sndt --ply out/map.ply --ellipsoids 1
+  sndt export out/map/maps/synth_00_living_cam_00.sndt --octomap out/map.bt
   sndt export synthetic:1:20 --cell 0.05 --mcap out/map.mcap --mcap-interval 5")]
 pub struct ExportArgs {
     /// A map snapshot (`.sndt`, from `sndt map --save-maps`), or a dataset whose first
@@ -31,11 +35,17 @@ pub struct ExportArgs {
     /// fly).
     pub input: String,
     /// Output PLY file.
-    #[arg(long, required_unless_present = "mcap")]
+    #[arg(long, required_unless_present_any = ["mcap", "octomap"])]
     pub ply: Option<PathBuf>,
+    /// Output OctoMap of the occupancy layer at the map's cell size, one leaf per known
+    /// voxel: `.bt` a binary OcTree (free / occupied), `.ot` a ColorOcTree (log-odds and
+    /// class colours).
+    #[arg(long, value_name = "FILE")]
+    pub octomap: Option<PathBuf>,
     /// Output ROS 2 bag (rosbag2, MCAP): /sndt/map/points (PointCloud2), /sndt/map/gaussians
-    /// (MarkerArray), /tf_static (latched). A path ending in `/` (or an existing directory)
-    /// is written as a bag folder: `DIR/<DIR's name>_0.mcap` and `DIR/metadata.yaml`.
+    /// (MarkerArray), /octomap_binary (octomap_msgs/Octomap), /tf_static (latched). A path
+    /// ending in `/` (or an existing directory) is written as a bag folder:
+    /// `DIR/<DIR's name>_0.mcap` and `DIR/metadata.yaml`.
     #[arg(long)]
     pub mcap: Option<PathBuf>,
     /// With a dataset and --mcap: also write the map every N frames (of those --every
@@ -63,20 +73,29 @@ pub struct ExportArgs {
     pub every: EveryArgs,
 }
 
-/// Runs `sndt export`: loads or builds the map, writes its Gaussians and prints what it
-/// wrote.
+/// Runs `sndt export`: loads or builds the map, writes its Gaussians and occupancy and
+/// prints what it wrote.
 pub fn run(a: &ExportArgs) -> Result<()> {
     let path = Path::new(&a.input);
     let is_snapshot = path.is_file() && path.extension().is_none_or(|e| e != "mcap");
     if path.extension().is_some_and(|e| e == "sndt") && !path.is_file() {
         anyhow::bail!("{}: no such map snapshot file", path.display());
     }
+    // Before any work: a wrong extension should not cost a mapping run.
+    if let Some(o) = &a.octomap {
+        OctoFormat::of(o)?;
+    }
     let mut bag = match &a.mcap {
         Some(p) => Some(MapBag::create(p, &a.open.world_frame, Time::default())?),
         None => None,
     };
     let map = if is_snapshot {
-        load_snapshot(path)?
+        let map = load_snapshot(path)?;
+        // A snapshot has no recording time: its one map snapshot goes at 0, with /tf_static.
+        if let Some(b) = bag.as_mut() {
+            b.write(map.as_ref(), Time::default())?;
+        }
+        map
     } else {
         map_first_trajectory(a, bag.as_mut())?
     };
@@ -88,6 +107,29 @@ pub fn run(a: &ExportArgs) -> Result<()> {
     if let Some(ply) = &a.ply {
         write_ply(ply, map.as_ref(), a)?;
     }
+    if let Some(o) = &a.octomap {
+        write_occupancy(o, map.as_ref())?;
+    }
+    Ok(())
+}
+
+/// Writes the OctoMap of `map`'s occupancy layer.
+fn write_occupancy(path: &Path, map: &HostMap) -> Result<()> {
+    let tree = OctoMap::from_map(map);
+    let (format, nodes) = write_octomap(path, &tree)?;
+    let kind = match format {
+        OctoFormat::Binary => "binary OcTree",
+        OctoFormat::Color => "ColorOcTree",
+    };
+    let leaves = tree.leaves().len();
+    println!(
+        "wrote {}: {kind} at {} m, {leaves} leaves = known voxels ({} occupied, {} free), \
+         {nodes} nodes",
+        path.display(),
+        tree.resolution(),
+        tree.occupied(),
+        leaves - tree.occupied()
+    );
     Ok(())
 }
 

@@ -62,7 +62,8 @@ enum Command {
     /// Merge saved maps and devices' record streams into one map (two robots, two
     /// sessions, a co-processor's spill).
     Merge(merge::MergeArgs),
-    /// Write a map's Gaussians as a PLY (points or ellipsoids) for MeshLab/CloudCompare.
+    /// Write a map's Gaussians as a PLY (points or ellipsoids) for MeshLab/CloudCompare, its
+    /// occupancy as an OctoMap (.bt, .ot) and / or both as a ROS 2 bag.
     Export(export::ExportArgs),
     /// Integrate frames into the core and the f64 reference and compare them per cell size.
     Compare(compare::CompareArgs),

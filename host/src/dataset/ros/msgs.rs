@@ -403,6 +403,25 @@ pub struct MarkerArray {
     pub markers: Vec<Marker>,
 }
 
+/// `octomap_msgs/msg/Octomap` (octomap_msgs 2.x, the ROS 2 package): an OctoMap tree as
+/// `octomap_msgs::fullMsgToMap` / `binaryMsgToMap` read it.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Octomap {
+    /// Stamp and the tree's frame.
+    pub header: Header,
+    /// True for a binary tree (free / occupied only, `.bt` data), false for a full one.
+    pub binary: bool,
+    /// The tree's class: `OcTree`, `ColorOcTree`, ...
+    pub id: String,
+    /// Edge of the smallest nodes, metres.
+    pub resolution: f64,
+    /// The tree as `writeBinaryData` / `writeData` write it, without the file header.
+    /// `int8[]` in the message: CDR encodes it byte for byte like `uint8[]`, so the bytes
+    /// are kept as they are written.
+    #[serde(with = "serde_bytes")]
+    pub data: Vec<u8>,
+}
+
 /// The `ros2msg` definitions: `(schema name, full text with its dependencies)`.
 pub mod definitions {
     const SEP: &str =
@@ -550,5 +569,12 @@ pub mod definitions {
             QUATERNION,
         ];
         ("tf2_msgs/msg/TFMessage", with_deps(own, &deps))
+    }
+
+    /// `octomap_msgs/msg/Octomap`: the text of `msg/Octomap.msg` in octomap_msgs 2.0.0 (the
+    /// ROS 2 Humble package), comments included.
+    pub fn octomap() -> (&'static str, String) {
+        let own = "# A 3D map in binary format, as Octree\nstd_msgs/Header header\n\n# Flag to denote a binary (only free/occupied) or full occupancy octree (.bt/.ot file)\nbool binary\n\n# Class id of the contained octree \nstring id\n\n# Resolution (in m) of the smallest octree nodes\nfloat64 resolution\n\n# binary serialization of octree, use conversions.h to read and write octrees\nint8[] data\n";
+        ("octomap_msgs/msg/Octomap", with_deps(own, &[HEADER, TIME]))
     }
 }

@@ -1,16 +1,19 @@
 //! A map as ROS 2 messages in an MCAP file that Foxglove opens and `ros2 bag play` plays:
 //! the occupied Gaussians' means as a `sensor_msgs/msg/PointCloud2` (x, y, z, rgb in the
 //! NYU40 palette, class, confidence, occupancy) and as ellipsoid markers
-//! (`visualization_msgs/msg/MarkerArray`), in the frame `sndt_map`, which `/tf_static`
-//! puts at the identity of the world frame. Written once, or every N frames
+//! (`visualization_msgs/msg/MarkerArray`), and the occupancy layer as an OctoMap binary tree
+//! (`octomap_msgs/msg/Octomap` on `/octomap_binary`, as octomap_server publishes it, see
+//! [`crate::output::octomap`]), in the frame `sndt_map`, which `/tf_static` puts at the
+//! identity of the world frame. Written once, or every N frames
 //! (`--mcap-interval N`) so that the recording plays back as a growing map.
 
 use super::write::BagWriter;
 use crate::dataset::classes::color;
 use crate::dataset::ros::msgs::{
-    self, ColorRgba, Header, Marker, MarkerArray, PointCloud2, PointField, Pose, TfMessage, Time,
-    Transform, TransformStamped,
+    self, ColorRgba, Header, Marker, MarkerArray, Octomap, PointCloud2, PointField, Pose,
+    TfMessage, Time, Transform, TransformStamped,
 };
+use crate::output::octomap::OctoMap;
 use anyhow::Result;
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion};
 use sndt_core::{Map, Occupancy};
@@ -20,6 +23,8 @@ use std::path::Path;
 pub const POINTS: &str = "/sndt/map/points";
 /// Topic of the ellipsoid markers.
 pub const GAUSSIANS: &str = "/sndt/map/gaussians";
+/// Topic of the OctoMap binary tree (octomap_server's name for it).
+pub const OCTOMAP: &str = "/octomap_binary";
 /// Frame of the map's messages.
 pub const MAP_FRAME: &str = "sndt_map";
 
@@ -169,6 +174,21 @@ fn markers(header: Header, voxels: &[Exported], sigmas: f64) -> MarkerArray {
     }
 }
 
+/// The occupancy layer of `map` as the binary `OcTree` message octomap_server publishes.
+fn octomap<const V: usize, const B: usize, const C: usize>(
+    header: Header,
+    map: &Map<V, B, C>,
+) -> Octomap {
+    let tree = OctoMap::from_map(map);
+    Octomap {
+        header,
+        binary: true,
+        id: "OcTree".into(),
+        resolution: tree.resolution(),
+        data: tree.binary_data().bytes,
+    }
+}
+
 /// An MCAP file of map snapshots.
 pub struct MapBag {
     bag: BagWriter,
@@ -187,6 +207,7 @@ impl MapBag {
         let mut bag = BagWriter::create(path)?;
         bag.add_topic(POINTS, msgs::definitions::point_cloud2())?;
         bag.add_topic(GAUSSIANS, msgs::definitions::marker_array())?;
+        bag.add_topic(OCTOMAP, msgs::definitions::octomap())?;
         bag.add_topic("/tf_static", msgs::definitions::tf_message())?;
         let fixed = TransformStamped {
             header: Header {
@@ -211,7 +232,8 @@ impl MapBag {
         })
     }
 
-    /// Writes the map as it is at `stamp`: the cloud and the markers. Returns the points.
+    /// Writes the map as it is at `stamp`: the cloud, the markers and the OctoMap. Returns
+    /// the points.
     pub fn write<const V: usize, const B: usize, const C: usize>(
         &mut self,
         map: &Map<V, B, C>,
@@ -224,8 +246,12 @@ impl MapBag {
         };
         self.bag
             .write(POINTS, stamp, &cloud(header.clone(), &voxels))?;
-        self.bag
-            .write(GAUSSIANS, stamp, &markers(header, &voxels, self.sigmas))?;
+        self.bag.write(
+            GAUSSIANS,
+            stamp,
+            &markers(header.clone(), &voxels, self.sigmas),
+        )?;
+        self.bag.write(OCTOMAP, stamp, &octomap(header, map))?;
         self.written += 1;
         Ok(voxels.len())
     }
