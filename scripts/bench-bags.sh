@@ -2,8 +2,9 @@
 # Opt-in benchmark: peak memory and throughput of `sndt map` on long ROS 2 bags, against
 # the prepared layout holding the same frames.
 #
-# For each size in SIZES (default "1G 8G"; M for megabytes, e.g. "100M" for a quick run), `sndt synth --scene floor` renders a walk
-# through the synthetic building floor with as many 1024x768 frames as fill that many GB
+# For each size in SIZES (default "1G 8G"; M for megabytes, e.g. "100M" for a quick run),
+# `sndt synth` renders one trajectory through the synthetic living room with as many
+# 1024x768 frames as fill that many bytes
 # as an uncompressed bag (as `ros2 bag record` writes by default: 2.36 MB of 16UC1 depth
 # and mono8 labels per frame), and writes the same frames in the prepared layout. Then
 # `sndt map` maps each at 10 cm (release build), under GNU time for the peak RSS. The
@@ -12,7 +13,7 @@
 # they are read from the page cache.
 #
 # Needs about 1.1 x the sizes in free disk under $OUT (default target/bench-bags) and
-# takes about an hour for "1G 8G" on 2 cores; KEEP=1 keeps the bags for another run.
+# takes about 50 minutes for "1G 8G" on 2 cores; KEEP=1 keeps the bags for another run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -56,12 +57,12 @@ for spec in $SIZES; do
     *) echo "error: a size is NG or NM, got '$spec'" >&2 && exit 2 ;;
     esac
     frames=$((bytes / FRAME_BYTES + 1))
-    bag="$OUT/floor-$spec.mcap"
-    prepared="$OUT/floor-$spec"
+    bag="$OUT/room-$spec.mcap"
+    prepared="$OUT/room-$spec"
     if [ ! -f "$bag" ] || [ ! -d "$prepared" ]; then
-        step "$spec: $frames frames of the floor walk as a bag and in the prepared layout"
+        step "$spec: $frames frames of the living room as a bag and in the prepared layout"
         rm -rf "$bag" "$prepared"
-        "$SNDT" synth --scene floor --frames-per-scene "$frames" --no-predictions \
+        "$SNDT" synth --scenes 1 --frames-per-scene "$frames" --no-predictions \
             --mcap "$bag" --mcap-compression none --out "$prepared" >/dev/null
     fi
     size=$(stat -c %s "$bag")

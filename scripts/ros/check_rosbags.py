@@ -9,8 +9,9 @@ store), deserializes every message of every topic and checks what sndt wrote:
 - a folder: metadata.yaml version 5, storage mcap, its counts and time span as read;
 - `frames N` (sndt synth): N depth images (16UC1), labels (mono8), camera infos and /tf
   transforms of one size and frame, and one /tf_static;
-- `map N` (sndt map / sndt export): N point clouds of the documented fields and N marker
-  arrays (a delete-all, then one ellipsoid per point), /tf_static placing sndt_map;
+- `map N` (sndt map / sndt export): N point clouds of the documented fields, N marker
+  arrays (a delete-all, then one ellipsoid per point) and N binary OcTrees
+  (octomap_msgs, whose type the bag's own definition gives), /tf_static placing sndt_map;
 - bags named together (a file and a folder from the same command) hold the same messages.
 
     python check_rosbags.py frames|map N BAG [BAG...]
@@ -21,13 +22,14 @@ from pathlib import Path
 from mcap.reader import make_reader
 from rosbags.interfaces import QosDurability, QosHistory, QosReliability
 from rosbags.rosbag2 import Reader
-from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from ruamel.yaml import YAML
 
 STORE = get_typestore(Stores.ROS2_HUMBLE)
 IMAGE = "sensor_msgs/msg/Image"
 CLOUD = "sensor_msgs/msg/PointCloud2"
 MARKERS = "visualization_msgs/msg/MarkerArray"
+OCTOMAP = "octomap_msgs/msg/Octomap"
 FIELDS = [("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("rgb", 12, 7), ("confidence", 16, 7),
           ("occupancy", 20, 7), ("class", 24, 2)]
 
@@ -58,12 +60,23 @@ def check_qos(bag, conn):
         fail(f"{bag} {conn.topic}: serialization {conn.ext.serialization_format}")
 
 
+def register(conn):
+    """A type the Humble store lacks (octomap_msgs is not part of ROS 2's core) is taken
+    from the definition the bag carries: its own text, before the dependencies that
+    rosbag2 appends (those are in the store)."""
+    if conn.msgtype in STORE.fielddefs:
+        return
+    own = conn.msgdef.data.split("=" * 80)[0]
+    STORE.register(get_types_from_msg(own, conn.msgtype))
+
+
 def read(bag):
     """Every message of `bag` as (topic, time, raw, decoded), and per topic its type."""
     out, types = [], {}
     with Reader(bag) as reader:
         for conn in reader.connections:
             check_qos(bag, conn)
+            register(conn)
             types[conn.topic] = conn.msgtype
         counts = dict.fromkeys(types, 0)
         for conn, t, raw in reader.messages():
@@ -136,6 +149,12 @@ def check_map(bag, msgs, n):
         ms = array.markers
         if ms[0].action != 3 or len(ms) != cloud.width + 1 or any(m.type != 2 for m in ms[1:]):
             fail(f"{bag}: {len(ms)} markers for {cloud.width} points")
+    octomaps = [m for _, _, _, m in msgs if m.__msgtype__ == OCTOMAP]
+    if len(octomaps) != n:
+        fail(f"{bag}: {len(octomaps)} octomaps, expected {n}")
+    for o in octomaps:
+        if (o.header.frame_id, o.binary, o.id, len(o.data) > 0) != ("sndt_map", True, "OcTree", True):
+            fail(f"{bag}: octomap {o.id} binary {o.binary} in {o.header.frame_id}, {len(o.data)} bytes")
     static = [(t.header.frame_id, t.child_frame_id)
               for topic, _, _, m in msgs if topic == "/tf_static" for t in m.transforms]
     if static != [("world", "sndt_map")]:

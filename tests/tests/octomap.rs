@@ -5,7 +5,7 @@
 
 use sndt_core::Config;
 use sndt_host::dataset::frame::LabelSource;
-use sndt_host::dataset::ros::msgs::{definitions, Octomap};
+use sndt_host::dataset::ros::msgs::{definitions, from_cdr, Octomap};
 use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
 use sndt_host::eval::evaluate::{evaluate, EvalOptions};
 use sndt_host::output::octomap::{write_octomap, OctoFormat, OctoMap};
@@ -46,7 +46,7 @@ fn map_bags_carry_the_occupancy_as_an_octomap_message() {
             (name, "ros2msg")
         );
         assert_eq!(std::str::from_utf8(&schema.data).unwrap(), text);
-        messages.push((m.log_time, cdr::deserialize::<Octomap>(&m.data).unwrap()));
+        messages.push((m.log_time, from_cdr::<Octomap>(&m.data).unwrap()));
     }
     // Like the other map topics: after frame 2 (every 2) and after the last, frame 3.
     let stamps: Vec<u64> = messages.iter().map(|m| m.0).collect();

@@ -418,10 +418,7 @@ fn sndt_map_writes_a_growing_map_bag_per_trajectory() {
         for m in mcap::MessageStream::new(&bytes).unwrap() {
             let m = m.unwrap();
             if m.channel.topic == POINTS {
-                clouds.push((
-                    m.log_time,
-                    cdr::deserialize::<PointCloud2>(&m.data).unwrap(),
-                ));
+                clouds.push((m.log_time, msgs::from_cdr::<PointCloud2>(&m.data).unwrap()));
             }
             markers += usize::from(m.channel.topic == GAUSSIANS);
         }

@@ -18,7 +18,7 @@ use std::path::PathBuf;
   sndt budget synthetic:floor --capacity 4096 --blocks 512 --fps 10")]
 pub struct BudgetArgs {
     /// Dataset whose trajectories to simulate at this capacity: a directory (prepared
-    /// layout or raw Hypersim), a ROS 2 bag (`.mcap`), `synthetic[:SCENES:FRAMES]` or
+    /// layout or raw Hypersim), a ROS 2 bag (`.mcap` file or rosbag2 folder), `synthetic[:SCENES:FRAMES]` or
     /// `synthetic:floor[:WALK[:FRAMES]]` (rendered on the fly).
     pub dataset: Option<PathBuf>,
     /// Voxel edge in metres.

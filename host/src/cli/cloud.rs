@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 #[command(after_help = "Example:
   sndt cloud data/synth --frame synth_00_living/cam_00/0000 --out out/frame.ply")]
 pub struct CloudArgs {
-    /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`),
+    /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap` file or rosbag2 folder),
     /// `synthetic[:SCENES:FRAMES]` or `synthetic:floor[:WALK[:FRAMES]]` (rendered on the
     /// fly).
     pub dataset: PathBuf,

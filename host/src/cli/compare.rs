@@ -19,7 +19,7 @@ use std::fmt;
 #[command(after_help = "Example:
   sndt compare synthetic --cell 0.05,0.1 --frames 0..20")]
 pub struct CompareArgs {
-    /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`),
+    /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap` file or rosbag2 folder),
     /// `synthetic[:SCENES:FRAMES]` or `synthetic:floor[:WALK[:FRAMES]]` (rendered on the
     /// fly); `synthetic` alone is its first scene.
     pub dataset: String,

@@ -30,7 +30,7 @@ use std::path::{Path, PathBuf};
   sndt export synthetic:1:20 --cell 0.05 --mcap out/map.mcap --mcap-interval 5")]
 pub struct ExportArgs {
     /// A map snapshot (`.sndt`, from `sndt map --save-maps`), or a dataset whose first
-    /// trajectory is mapped: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`),
+    /// trajectory is mapped: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap` file or rosbag2 folder),
     /// `synthetic[:SCENES:FRAMES]` or `synthetic:floor[:WALK[:FRAMES]]` (rendered on the
     /// fly).
     pub input: String,

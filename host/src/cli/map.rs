@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
   sndt map robot.mcap --every 2 --world-frame odom --mcap out/robot/map.mcap --mcap-interval 10
   sndt map synthetic:floor --device 4096,512 --out out/floor")]
 pub struct MapArgs {
-    /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`),
+    /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap` file or rosbag2 folder),
     /// `synthetic[:SCENES:FRAMES]` or `synthetic:floor[:WALK[:FRAMES]]` (rendered on the
     /// fly).
     pub dataset: String,

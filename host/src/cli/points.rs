@@ -19,7 +19,7 @@ use std::path::PathBuf;
 #[command(after_help = "Example:
   sndt points data/synth --frames 0..12 --out out/points.bin")]
 pub struct PointsArgs {
-    /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap`),
+    /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap` file or rosbag2 folder),
     /// `synthetic[:SCENES:FRAMES]` or `synthetic:floor[:WALK[:FRAMES]]` (rendered on the
     /// fly).
     pub dataset: String,

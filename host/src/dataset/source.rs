@@ -214,7 +214,7 @@ pub struct OpenOptions {
     /// Directory of ESANet `.npy` predictions (`<dir>/<scene>/<cam>/<NNNN>.npy`);
     /// default: `<root>/<split>/esanet` when it exists.
     pub predictions: Option<std::path::PathBuf>,
-    /// How to read a ROS 2 bag (`.mcap`): topics, world frame, sync tolerance.
+    /// How to read a ROS 2 bag (`.mcap` file or rosbag2 folder): topics, world frame, sync tolerance.
     pub bag: BagOptions,
 }
 

@@ -4,6 +4,24 @@
 
 use serde::{Deserialize, Serialize};
 
+/// Encodes a message as ROS 2 publishes it: the encapsulation header of little-endian plain
+/// CDR, then the fields in order.
+///
+/// ```
+/// use sndt_host::dataset::ros::msgs::{from_cdr, to_cdr, Time};
+/// let t = Time { sec: 7, nanosec: 9 };
+/// assert_eq!(to_cdr(&t).unwrap(), [0, 1, 0, 0, 7, 0, 0, 0, 9, 0, 0, 0]);
+/// assert_eq!(from_cdr::<Time>(&to_cdr(&t).unwrap()), Ok(t));
+/// ```
+pub fn to_cdr<T: Serialize>(msg: &T) -> Result<Vec<u8>, String> {
+    let body =
+        cdr_encoding::to_vec::<T, byteorder::LittleEndian>(msg).map_err(|e| e.to_string())?;
+    let mut out = Vec::with_capacity(4 + body.len());
+    out.extend_from_slice(&[0, 1, 0, 0]);
+    out.extend_from_slice(&body);
+    Ok(out)
+}
+
 /// Decodes a CDR message: the 4-byte encapsulation header (plain CDR, big- or
 /// little-endian), then the fields. Each declared string or sequence length is checked
 /// against the bytes left before anything is copied, so a corrupt length is an error, not

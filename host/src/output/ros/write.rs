@@ -258,8 +258,7 @@ impl BagWriter {
             .channels
             .get(topic)
             .ok_or_else(|| anyhow!("{topic}: topic not declared"))?;
-        let data = cdr::serialize::<_, _, cdr::CdrLe>(msg, cdr::Infinite)
-            .map_err(|e| anyhow!("{topic}: encoding CDR: {e}"))?;
+        let data = msgs::to_cdr(msg).map_err(|e| anyhow!("{topic}: encoding CDR: {e}"))?;
         self.sequence += 1;
         let t = stamp.nanos();
         let header = mcap::records::MessageHeader {
