@@ -41,21 +41,10 @@ LOAD=$(cut -d' ' -f1 /proc/loadavg)
 
 step() { printf '\n==> %s\n' "$*"; }
 
-installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q 'install ok installed'; }
+. scripts/lib/install.sh
 
 step "OctoMap, g++ and pkg-config"
-missing=()
-installed liboctomap-dev || missing+=(liboctomap-dev)
-command -v g++ >/dev/null 2>&1 || missing+=(g++)
-command -v pkg-config >/dev/null 2>&1 || missing+=(pkg-config)
-if ((${#missing[@]})); then
-    sudo=()
-    if [ "$(id -u)" -ne 0 ]; then sudo=(sudo); fi
-    export DEBIAN_FRONTEND=noninteractive
-    "${sudo[@]}" apt-get update -qq
-    "${sudo[@]}" apt-get install -y -qq "${missing[@]}" >/dev/null
-fi
-echo "octomap $(pkg-config --modversion octomap), $(g++ --version | head -n 1)"
+ensure_octomap
 
 step "frames: synthetic living room, $FRAMES frames ($DATA)"
 mkdir -p "$WORK"

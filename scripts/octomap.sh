@@ -18,33 +18,13 @@ VENV=target/ros-venv
 CELL=0.1
 CHECK="$TARGET/octomap/check_octomap"
 step() { printf '\n==> %s\n' "$*"; }
-installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q 'install ok installed'; }
+. scripts/lib/install.sh
 
 step "liboctomap-dev, g++ and pkg-config"
-missing=()
-installed liboctomap-dev || missing+=(liboctomap-dev)
-command -v g++ >/dev/null 2>&1 || missing+=(g++)
-command -v pkg-config >/dev/null 2>&1 || missing+=(pkg-config)
-if ((${#missing[@]})); then
-    sudo=()
-    if [ "$(id -u)" -ne 0 ]; then sudo=(sudo); fi
-    export DEBIAN_FRONTEND=noninteractive
-    "${sudo[@]}" apt-get update -qq
-    "${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-fi
-echo "octomap $(pkg-config --modversion octomap), $(g++ --version | head -n 1)"
+ensure_octomap
 
-step "Python reader (mcap, mcap-ros2-support) in $VENV"
-if ! "$VENV/bin/python" -c 'import mcap, mcap_ros2' 2>/dev/null; then
-    if ! python3 -m venv "$VENV" 2>/dev/null; then
-        export DEBIAN_FRONTEND=noninteractive
-        apt-get update -qq
-        apt-get install -y -qq --no-install-recommends python3-venv
-        python3 -m venv "$VENV"
-    fi
-    # The versions scripts/ros.sh pins.
-    "$VENV/bin/pip" install -q 'mcap==1.*' 'mcap-ros2-support==0.5.*'
-fi
+step "Python reader (mcap, mcap-ros2-support; installed as for scripts/ros.sh) in $VENV"
+ensure_ros_venv "$VENV"
 "$VENV/bin/python" -c 'import mcap, mcap_ros2; print("mcap", mcap.__version__, "mcap-ros2-support", mcap_ros2.__version__)'
 
 

@@ -19,16 +19,8 @@ WORK=target/ros-check
 step() { printf '\n==> %s\n' "$*"; }
 
 step "Python readers/writers (mcap, mcap-ros2-support, rosbags, pypng) in $VENV"
-if ! "$VENV/bin/python" -c 'import mcap, mcap_ros2, png, rosbags' 2>/dev/null; then
-    if ! python3 -m venv "$VENV" 2>/dev/null; then
-        export DEBIAN_FRONTEND=noninteractive
-        apt-get update -qq
-        apt-get install -y -qq --no-install-recommends python3-venv
-        python3 -m venv "$VENV"
-    fi
-    "$VENV/bin/pip" install -q 'mcap==1.*' 'mcap-ros2-support==0.5.*' 'pypng==0.20220715.*' \
-        'rosbags==0.11.*'
-fi
+. scripts/lib/install.sh
+ensure_ros_venv "$VENV"
 PY="$VENV/bin/python"
 
 step "a synthetic trajectory: prepared layout and bags (sndt synth), a bag written by Python"
