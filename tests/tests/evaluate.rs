@@ -201,7 +201,7 @@ fn snapshots_round_trip_through_files() {
 #[test]
 fn every_mapper_runs_through_one_loop() {
     use sndt_host::baselines::bki::{BkiConfig, BkiMap, Readout};
-    use sndt_host::eval::evaluate::{map_and_score, MapScore};
+    use sndt_host::eval::evaluate::{map_and_score, Frames, MapScore};
     use sndt_host::reference::RefMap;
     use sndt_host::semantic_map::SemanticMap;
     use std::borrow::Cow;
@@ -215,7 +215,7 @@ fn every_mapper_runs_through_one_loop() {
         let mut renders = 0;
         let score = map_and_score(
             map,
-            frames.iter().map(|f| Ok(Cow::Borrowed(f))),
+            Frames::kept(frames.iter().map(|f| Ok(Cow::Borrowed(f)))),
             LabelSource::Gt,
             1,
             r,
@@ -265,4 +265,45 @@ fn every_mapper_runs_through_one_loop() {
     // BKI takes one label per pixel and every pixel.
     assert!(bki.integrate_frame(f, LabelSource::PredTopk, 1).is_err());
     assert!(bki.integrate_frame(f, LabelSource::Gt, 2).is_err());
+}
+
+/// The render pass reads frames again past its memory budget: with no budget (every frame
+/// read again from the dataset) the renders and scores are those of keeping every frame.
+#[test]
+fn frames_read_again_for_the_render_pass_score_as_kept_ones() {
+    use sndt_host::eval::evaluate::{map_and_score, Frames};
+    use sndt_host::semantic_map::boxed_map;
+    use std::borrow::Cow;
+    let data = split(4);
+    let ids = data.trajectories()[0].1.clone();
+    let reload = |id: &sndt_host::dataset::FrameId| data.load(id);
+    let run = |keep_bytes: usize| {
+        let mut map: Box<HostMap> = boxed_map(Config::with_cell_size(0.1)).unwrap();
+        let mut renders = Vec::new();
+        let frames = Frames {
+            frames: ids.iter().map(|id| data.load(id).map(Cow::Owned)),
+            reload: Some(&reload),
+            keep_bytes,
+        };
+        let score = map_and_score(
+            map.as_mut(),
+            frames,
+            LabelSource::Gt,
+            1,
+            &[()],
+            |_, _| Ok(()),
+            |f, labels| {
+                renders.push((f.id.clone(), labels.to_vec()));
+                Ok(())
+            },
+        )
+        .unwrap();
+        (score.confusions[0].metrics(), renders)
+    };
+    let (kept, kept_renders) = run(usize::MAX);
+    let (read_again, again_renders) = run(0);
+    assert_eq!(kept_renders.len(), 4);
+    assert_eq!(kept_renders, again_renders);
+    assert_eq!(kept, read_again);
+    assert!(kept.miou > 0.3, "{kept:?}");
 }

@@ -220,51 +220,107 @@ impl MapScore {
     }
 }
 
+/// Bytes of owned frames [`map_and_score`] keeps in memory for its render pass; frames
+/// past this are read again from the dataset instead, so a long recording is evaluated in
+/// bounded memory (a 1024x768 frame is about 4 MB).
+pub const KEEP_FRAME_BYTES: usize = 512 << 20;
+
+/// How [`map_and_score`] reads a frame again for its render pass (the dataset's `load`).
+pub type Reload<'a> = &'a (dyn Fn(&FrameId) -> Result<Frame> + Sync);
+
+/// The frames [`map_and_score`] maps and renders into.
+pub struct Frames<'a, I> {
+    /// The trajectory's frames in order (loaded lazily if the iterator does).
+    pub frames: I,
+    /// Reads a frame again for the render pass; `None` keeps every frame in memory.
+    pub reload: Option<Reload<'a>>,
+    /// Bytes of owned frames kept for the render pass before the others are read again
+    /// ([`KEEP_FRAME_BYTES`] for the tools).
+    pub keep_bytes: usize,
+}
+
+impl<'a, 'f, I: IntoIterator<Item = Result<Cow<'f, Frame>>>> Frames<'a, I> {
+    /// All frames kept in memory (borrowed ones cost nothing).
+    pub fn kept(frames: I) -> Self {
+        Frames {
+            frames,
+            reload: None,
+            keep_bytes: usize::MAX,
+        }
+    }
+}
+
+/// A frame as the render pass gets it: kept, or to be read again.
+enum Kept<'f> {
+    Frame(Cow<'f, Frame>),
+    Reload(FrameId),
+}
+
 /// The paper's evaluation of one map on one trajectory, the same for every method: each
 /// frame is integrated in order with labels from `labels` (every `stride`-th pixel), each
 /// update timed on its own; then each read-out in `readouts` is prepared once and
 /// rendered into every frame at the frame's pose, and the renders are scored against the
 /// frames' ground truth (a frame without it is rendered but not scored).
 ///
-/// Frames arrive one at a time from `frames`, so a caller can load them lazily: borrowed
-/// frames are rendered as they are, owned ones are kept without their predictions, which
-/// rendering does not need. `after_update` sees each frame and the map after its (timed) update,
-/// `after_render` each frame's render.
+/// Frames arrive one at a time from `frames.frames`, so a caller can load them lazily:
+/// borrowed frames are rendered as they are; owned ones are kept without their predictions
+/// (which rendering does not need) up to `frames.keep_bytes`, and past that read again
+/// with `frames.reload` when there is one (without one, all are kept). The scores are the
+/// same either way. `after_update` sees each frame
+/// and the map after its (timed) update, `after_render` each frame's render.
 pub fn map_and_score<'f, M: SemanticMap + ?Sized>(
     map: &mut M,
-    frames: impl IntoIterator<Item = Result<Cow<'f, Frame>>>,
+    frames: Frames<impl IntoIterator<Item = Result<Cow<'f, Frame>>>>,
     labels: LabelSource,
     stride: u32,
     readouts: &[M::Readout],
     mut after_update: impl FnMut(&Frame, &M) -> Result<()>,
     mut after_render: impl FnMut(&Frame, &[u8]) -> Result<()>,
 ) -> Result<MapScore> {
+    let Frames {
+        frames,
+        reload,
+        keep_bytes,
+    } = frames;
     let mut update_ms = Vec::new();
     let mut kept = Vec::new();
+    let mut kept_bytes = 0;
     for frame in frames {
         let frame = frame?;
         let t = Instant::now();
         map.integrate_frame(&frame, labels, stride)?;
         update_ms.push(t.elapsed().as_secs_f64() * 1e3);
         after_update(&frame, map)?;
+        let bytes = frame.depth.len() * 4 + frame.labels.as_ref().map_or(0, Vec::len);
         kept.push(match frame {
-            Cow::Borrowed(f) => Cow::Borrowed(f),
-            Cow::Owned(f) => Cow::Owned(Frame {
-                predictions: None,
-                ..f
-            }),
+            Cow::Borrowed(f) => Kept::Frame(Cow::Borrowed(f)),
+            Cow::Owned(f) if reload.is_some() && kept_bytes + bytes > keep_bytes => {
+                Kept::Reload(f.id)
+            }
+            Cow::Owned(f) => {
+                kept_bytes += bytes;
+                Kept::Frame(Cow::Owned(Frame {
+                    predictions: None,
+                    ..f
+                }))
+            }
         });
     }
     let mut confusions = Vec::with_capacity(readouts.len());
     for &readout in readouts {
         let view = map.prepare(readout);
         let mut confusion = Confusion::default();
-        for frame in &kept {
-            let rendered = view.render_frame(frame)?;
+        for k in &kept {
+            let frame = match (k, reload) {
+                (Kept::Frame(f), _) => Cow::Borrowed(f.as_ref()),
+                (Kept::Reload(id), Some(load)) => Cow::Owned(load(id)?),
+                (Kept::Reload(id), None) => bail!("{id}: not kept and no way to read it again"),
+            };
+            let rendered = view.render_frame(&frame)?;
             if let Some(gt) = &frame.labels {
-                confusion.add_frame(gt, &rendered, &gt_depth(frame));
+                confusion.add_frame(gt, &rendered, &gt_depth(&frame));
             }
-            after_render(frame, &rendered)?;
+            after_render(&frame, &rendered)?;
         }
         confusions.push(confusion);
     }
@@ -367,9 +423,14 @@ fn evaluate_trajectory(
     // The map after the last frame mapped, when the bag does not have it yet.
     let mut unwritten = None;
     let frames = usable_frames(dataset, ids, options.config.cell_size, &mut skipped);
+    let reload = |id: &FrameId| dataset.load(id);
     let score = map_and_score(
         map.as_mut(),
-        frames.map(|frame| frame.map(Cow::Owned)),
+        Frames {
+            frames: frames.map(|frame| frame.map(Cow::Owned)),
+            reload: Some(&reload),
+            keep_bytes: KEEP_FRAME_BYTES,
+        },
         options.labels,
         options.stride,
         &[()],
@@ -445,9 +506,14 @@ fn evaluate_spilling<M: SpillingDevice>(
     let mapped = std::cell::Cell::new(0usize);
     let mut renders = 0usize;
     let frames = usable_frames(dataset, ids, options.config.cell_size, &mut skipped);
+    let reload = |id: &FrameId| dataset.load(id);
     let score = map_and_score(
         &mut map,
-        frames.map(|frame| frame.map(Cow::Owned)),
+        Frames {
+            frames: frames.map(|frame| frame.map(Cow::Owned)),
+            reload: Some(&reload),
+            keep_bytes: KEEP_FRAME_BYTES,
+        },
         options.labels,
         options.stride,
         &[readout, other_readout],

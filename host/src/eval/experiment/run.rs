@@ -17,7 +17,7 @@ use super::store::RunStore;
 use crate::baselines::bki::{BkiMap, Readout};
 use crate::dataset::frame::{Frame, FrameId, LabelSource};
 use crate::dataset::source::{usable_frames, Dataset};
-use crate::eval::evaluate::{gt_depth, map_and_score, MapScore};
+use crate::eval::evaluate::{gt_depth, map_and_score, Frames, MapScore};
 use crate::eval::metrics::Confusion;
 use crate::output::progress::progress;
 use crate::semantic_map::{boxed_map, HostMap, SemanticMap};
@@ -241,7 +241,7 @@ fn run_map<M: SemanticMap + ?Sized>(
 ) -> Result<MapScore> {
     map_and_score(
         map,
-        frames.iter().map(|f| Ok(Cow::Borrowed(f))),
+        Frames::kept(frames.iter().map(|f| Ok(Cow::Borrowed(f)))),
         labels,
         1,
         readouts,
