@@ -228,6 +228,19 @@ pub const KEEP_FRAME_BYTES: usize = 512 << 20;
 /// How [`map_and_score`] reads a frame again for its render pass (the dataset's `load`).
 pub type Reload<'a> = &'a (dyn Fn(&FrameId) -> Result<Frame> + Sync);
 
+/// Frames loaded one at a time, kept for the render pass up to [`KEEP_FRAME_BYTES`] and
+/// read again with `reload` past that.
+fn lazy_frames<'a, 'f>(
+    frames: impl Iterator<Item = Result<Frame>>,
+    reload: Reload<'a>,
+) -> Frames<'a, impl Iterator<Item = Result<Cow<'f, Frame>>>> {
+    Frames {
+        frames: frames.map(|frame| frame.map(Cow::Owned)),
+        reload: Some(reload),
+        keep_bytes: KEEP_FRAME_BYTES,
+    }
+}
+
 /// The frames [`map_and_score`] maps and renders into.
 pub struct Frames<'a, I> {
     /// The trajectory's frames in order (loaded lazily if the iterator does).
@@ -426,11 +439,7 @@ fn evaluate_trajectory(
     let reload = |id: &FrameId| dataset.load(id);
     let score = map_and_score(
         map.as_mut(),
-        Frames {
-            frames: frames.map(|frame| frame.map(Cow::Owned)),
-            reload: Some(&reload),
-            keep_bytes: KEEP_FRAME_BYTES,
-        },
+        lazy_frames(frames, &reload),
         options.labels,
         options.stride,
         &[()],
@@ -509,11 +518,7 @@ fn evaluate_spilling<M: SpillingDevice>(
     let reload = |id: &FrameId| dataset.load(id);
     let score = map_and_score(
         &mut map,
-        Frames {
-            frames: frames.map(|frame| frame.map(Cow::Owned)),
-            reload: Some(&reload),
-            keep_bytes: KEEP_FRAME_BYTES,
-        },
+        lazy_frames(frames, &reload),
         options.labels,
         options.stride,
         &[readout, other_readout],
