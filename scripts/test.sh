@@ -3,7 +3,8 @@
 # firmware in QEMU and the core's tests on aarch64 (qemu-aarch64) with one snapshot CRC on
 # all three architectures, the C API (header drift, C and C++ programs, C firmware in
 # QEMU), ROS 2 bags against the Python mcap packages, OctoMap exports read back by
-# liboctomap and compared voxel by voxel, and every test (unit, property, integration, doc).
+# liboctomap and compared voxel by voxel, every test (unit, property, integration, doc), and
+# the Python package (built and installed by pip, tested by pytest against the command line).
 # Installs what it needs; idempotent.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -55,6 +56,9 @@ step "cargo test (workspace: unit, property, integration, doc tests)"
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT
 cargo test --workspace 2>&1 | tee "$log"
+step "Python package: pip install ./python, pytest against the command line, the example"
+bash scripts/python.sh
+
 echo "the test command took $SECONDS s"
 # One closing line over all test binaries (cargo prints one summary per binary).
 awk '/^test result:/ { p += $4; f += $6 } END { printf "\nsndt: %d passed, %d failed\n", p, f }' "$log"

@@ -32,3 +32,17 @@ ensure_ros_venv() {
     "$venv/bin/pip" install -q 'mcap==1.*' 'mcap-ros2-support==0.5.*' 'pypng==0.20220715.*' \
         'rosbags==0.11.*'
 }
+
+# The Python package's build and test tools, pinned, in the venv $1: maturin (the build
+# backend, for `pip install --no-build-isolation`), numpy, pytest and pypng (the tests read
+# the command line's PNGs with it), matplotlib (the example).
+ensure_python_venv() {
+    local venv="$1"
+    if "$venv/bin/python" -c 'import numpy, pytest, png, matplotlib' 2>/dev/null &&
+        [ -x "$venv/bin/maturin" ]; then
+        return
+    fi
+    python3 -m venv "$venv" 2>/dev/null || { apt_install python3-venv && python3 -m venv "$venv"; }
+    "$venv/bin/pip" install -q 'maturin>=1.9.4,<2' 'numpy>=1.21,<3' 'pytest==8.*' \
+        'pypng==0.20220715.*' 'matplotlib==3.*'
+}
