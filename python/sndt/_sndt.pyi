@@ -145,8 +145,9 @@ class Map:
         ``depth``: ``uint16`` millimetres or ``float32`` metres, (H, W); zero, negative,
         NaN or inf is no measurement. ``labels``: ``uint8`` class ids (H, W), or top-k ids
         (k, H, W) with ``topk_scores`` ``float32`` in [0, 1] of the same shape; ``None`` for
-        geometry only. ``intrinsics``: ``(fx, fy, cx, cy)``. ``pose``: 4x4 camera-to-world
-        (OpenCV axes). ``depth_kind``: ``"planar"`` or ``"range"``. ``stride``: every
+        geometry only. ``intrinsics``: ``(fx, fy, cx, cy)`` in OpenCV's convention (the centre
+        of pixel ``(u, v)`` is at ``(u, v)``, as ROS ``CameraInfo.k``). ``pose``: 4x4
+        camera-to-world (OpenCV axes). ``depth_kind``: ``"planar"`` or ``"range"``. ``stride``: every
         stride-th pixel in both directions. Raises TypeError/ValueError for a bad argument,
         ``PoseError`` for a pose the map refuses; the map is unchanged then.
         """
@@ -230,7 +231,7 @@ class Frame:
         """Predicted top-3 ids and scores, each (3, H, W), or None."""
     @property
     def intrinsics(self) -> Optional[Tuple[float, float, float, float]]:
-        """``(fx, fy, cx, cy)``, None for a camera with a ray per pixel."""
+        """``(fx, fy, cx, cy)`` in OpenCV's convention, None for a camera with a ray per pixel."""
     @property
     def pose(self) -> npt.NDArray[np.float64]:
         """Camera-to-world 4x4 (OpenCV axes)."""

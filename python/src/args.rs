@@ -182,8 +182,10 @@ pub fn labels<'py>(
     ))
 }
 
-/// `(fx, fy, cx, cy)` and an image size as the core's camera: focal lengths finite and
-/// positive, centre finite.
+/// `(fx, fy, cx, cy)` in OpenCV's convention (as ROS `CameraInfo.k`: the centre of pixel
+/// `(u, v)` is at `(u, v)`) and an image size as the core's camera, whose principal point
+/// counts from the pixels' corner (`+ 0.5`). Focal lengths finite and positive, centre
+/// finite.
 pub fn intrinsics(intrinsics: &Bound<'_, PyAny>, size: (usize, usize)) -> PyResult<Pinhole> {
     const WHAT: &str = "intrinsics must be (fx, fy, cx, cy) in pixels";
     let v: Vec<f64> = if let Ok(a) = intrinsics.cast::<PyUntypedArray>() {
@@ -214,8 +216,8 @@ pub fn intrinsics(intrinsics: &Bound<'_, PyAny>, size: (usize, usize)) -> PyResu
     Ok(Pinhole {
         fx: v[0] as f32,
         fy: v[1] as f32,
-        cx: v[2] as f32,
-        cy: v[3] as f32,
+        cx: (v[2] + 0.5) as f32,
+        cy: (v[3] + 0.5) as f32,
         width: side(w, "width")?,
         height: side(h, "height")?,
     })

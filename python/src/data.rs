@@ -43,7 +43,8 @@ pub struct PyFrameIter {
 
 /// One frame: ``id`` (``scene/cam/NNNN``), ``depth`` ``float32`` metres (H, W) of
 /// ``depth_kind`` ``"planar"`` or ``"range"``, ``labels`` ``uint8`` (H, W) or ``None``,
-/// ``intrinsics`` ``(fx, fy, cx, cy)`` (``None`` for a camera with a ray per pixel),
+/// ``intrinsics`` ``(fx, fy, cx, cy)`` in OpenCV's convention (``None`` for a camera with a
+/// ray per pixel),
 /// ``pose`` 4x4 ``float64`` camera-to-world (OpenCV axes), ``topk`` the predicted top-3
 /// ``(ids uint8 (3, H, W), scores float32 (3, H, W))`` or ``None``, ``stamp`` the
 /// recording time in integer nanoseconds (ROS 2 bags) or ``None``.
@@ -290,11 +291,18 @@ impl PyFrame {
         Ok(Some(PyTuple::new(py, [ids, scores])?))
     }
 
-    /// ``(fx, fy, cx, cy)``, or ``None`` for a camera with a ray per pixel.
+    /// ``(fx, fy, cx, cy)`` in OpenCV's convention (the centre of pixel ``(u, v)`` is at
+    /// ``(u, v)``, as in ROS ``CameraInfo.k``), or ``None`` for a camera with a ray per pixel.
     #[getter]
     fn intrinsics(&self) -> Option<(f64, f64, f64, f64)> {
         match self.frame.rays.as_ref() {
-            Rays::Pinhole(p) => Some((p.fx as f64, p.fy as f64, p.cx as f64, p.cy as f64)),
+            // The core counts the principal point from the pixels' corner: 0.5 more.
+            Rays::Pinhole(p) => Some((
+                p.fx as f64,
+                p.fy as f64,
+                p.cx as f64 - 0.5,
+                p.cy as f64 - 0.5,
+            )),
             Rays::PerPixel { .. } => None,
         }
     }

@@ -7,7 +7,7 @@
 //! | `errors` | `sndt.Error` and a subclass per kind of core error |
 //! | `args` | checks of numpy arguments, the pose and the intrinsics |
 //! | `config` | the core's `Config` as keyword arguments and as a dict |
-//! | `capacity` | the capacities offered at run time ([`capacity::AnyMap`]) |
+//! | `capacity` | the capacities offered at run time (`AnyMap`) |
 //! | `map` | `sndt.Map`, `FrameReport`, `Voxels` |
 //! | `data` | `open_dataset`, `Dataset`, `Trajectory`, `Frame`, `evaluate`, `Metrics` |
 

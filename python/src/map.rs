@@ -251,7 +251,8 @@ impl PyMap {
     /// ``depth``: ``uint16`` millimetres or ``float32`` metres, shape (H, W); zero,
     /// negative, NaN or inf is no measurement. ``labels``: ``uint8`` class ids (H, W), or
     /// the top-k ids (k, H, W) with ``topk_scores`` ``float32`` in [0, 1] of the same shape;
-    /// ``None`` for geometry only. ``intrinsics``: ``(fx, fy, cx, cy)`` in pixels.
+    /// ``None`` for geometry only. ``intrinsics``: ``(fx, fy, cx, cy)`` in pixels, OpenCV's
+    /// convention (the centre of pixel ``(u, v)`` is at ``(u, v)``, as ROS ``CameraInfo.k``).
     /// ``pose``: 4x4 camera-to-world (OpenCV axes: x right, y down, z forward).
     /// ``depth_kind``: ``"planar"`` (along the optical axis) or ``"range"`` (from the optical
     /// centre). ``stride``: use every stride-th pixel in both directions.

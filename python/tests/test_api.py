@@ -151,3 +151,20 @@ def test_class_names_and_colours():
     # The PASCAL-VOC colour map: 1 wall is dark red, 2 floor dark green; 255 dark grey.
     assert colors[1].tolist() == [128, 0, 0] and colors[2].tolist() == [0, 128, 0]
     assert colors[255].tolist() == [40, 40, 40]
+
+
+def test_every_public_name_has_a_docstring_and_a_stub():
+    import pathlib
+
+    stub = (pathlib.Path(sndt.__file__).parent / "_sndt.pyi").read_text()
+    assert (pathlib.Path(sndt.__file__).parent / "py.typed").exists()
+    for name in sndt.__all__:
+        assert name in stub, name
+        obj = getattr(sndt, name)
+        if callable(obj):
+            assert obj.__doc__ and len(obj.__doc__) > 20, name
+    for cls in (sndt.Map, sndt.Frame, sndt.Trajectory, sndt.Dataset, sndt.Voxels, sndt.FrameReport):
+        for attr, value in vars(cls).items():
+            if not attr.startswith("_"):
+                assert value.__doc__, f"{cls.__name__}.{attr}"
+                assert f"def {attr}" in stub or f"{attr}:" in stub, f"{cls.__name__}.{attr}"
