@@ -85,7 +85,11 @@ timeout 120 qemu-system-arm -cpu cortex-m4 -machine mps2-an386 -nographic -monit
 
 step "cross-architecture CRCs: Cortex-M4F firmware vs host (x86-64) vs expected_*crc.txt"
 host_log="$tmp/host.log"
-cargo run -q -p sndt-host --bin sndt -- testvector --check "$VECTOR" >"$host_log"
+# `--workspace`: features resolved as `cargo test --workspace` resolves them, so the rest of
+# the test command uses this build of sndt-host instead of building it again.
+cargo build -q --workspace --bin sndt
+SNDT="${CARGO_TARGET_DIR:-target}/debug/sndt"
+"$SNDT" testvector --check "$VECTOR" >"$host_log"
 # check_crc NAME FIRMWARE_TEXT HOST_LINE EXPECTED_FILE: the CRC after FIRMWARE_TEXT in the
 # firmware's output and the host's line "HOST_LINE 0x..." must both equal the committed file.
 check_crc() {
@@ -106,9 +110,9 @@ check_crc render 'render crc' 'render crc' expected_render_crc.txt
 step "spill run: the firmware's UART record stream merged on the host vs the host's own run"
 spill_log="$tmp/spill.log"
 stream_log="$tmp/stream.log"
-cargo run -q -p sndt-host --bin sndt -- testvector --spill "$VECTOR" | tee "$spill_log"
+"$SNDT" testvector --spill "$VECTOR" | tee "$spill_log"
 echo
-cargo run -q -p sndt-host --bin sndt -- testvector --merge-stream "$uart" | tee "$stream_log"
+"$SNDT" testvector --merge-stream "$uart" | tee "$stream_log"
 # last_hex FILE PATTERN: the 0x........ after PATTERN on the last line that has it.
 last_hex() { grep -oE "$2 0x[0-9a-f]{8}" "$1" | awk '{ print $NF }' | tail -n 1 || true; }
 fw_spill_bytes=$(grep -oE 'spill stream bytes [0-9]+' "$log" | awk '{ print $4 }' | tail -n 1 || true)

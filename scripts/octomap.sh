@@ -39,7 +39,7 @@ echo "built"
 
 step "a synthetic map at $CELL m and its exports (.bt, .ot, map bag)"
 # The dev profile shares its build with the rest of the test command (see scripts/ros.sh).
-cargo build -q -p sndt-host --bin sndt --example octomap_check
+cargo build -q --workspace --bin sndt --example octomap_check
 SNDT="$TARGET/debug/sndt"
 COMPARE="$TARGET/debug/examples/octomap_check"
 rm -rf "$WORK" && mkdir -p "$WORK"

@@ -28,7 +28,7 @@ MATURIN_PEP517_ARGS="--profile dev" pip install -q --no-build-isolation \
 echo "wheel built and installed in $((SECONDS - start)) s"
 
 step "the sndt command line the tests compare with"
-cargo build -q -p sndt-host --bin sndt
+cargo build -q --workspace --bin sndt
 export SNDT_BIN="$TARGET/debug/sndt"
 
 step "pytest python/tests, and the package's doctests"

@@ -24,9 +24,10 @@ ensure_ros_venv "$VENV"
 PY="$VENV/bin/python"
 
 step "a synthetic trajectory: prepared layout and bags (sndt synth), a bag written by Python"
-# The dev profile (opt-level 2, see Cargo.toml) shares its build with the rest of the
-# test command; a release build would cost a minute more.
-cargo build -q -p sndt-host --bin sndt
+# The dev profile (opt-level 2, see Cargo.toml) and `--workspace` (features resolved as
+# `cargo test --workspace` resolves them) share the build with the rest of the test
+# command; a release build would cost a minute more.
+cargo build -q --workspace --bin sndt
 SNDT=${CARGO_TARGET_DIR:-target}/debug/sndt
 rm -rf "$WORK" && mkdir -p "$WORK"
 "$SNDT" synth --scenes 1 --frames-per-scene 8 --no-predictions --out "$WORK/prepared" \
