@@ -8,7 +8,8 @@ Printed: ms/frame (mean and median of the timed frames), per run and over RUNS r
 alternating the methods.
 
 - sndt from Python: `Map.integrate(depth, labels, intrinsics=..., pose=...)`, the
-  argument checks included.
+  argument checks included; against `Map.integrate_frame(frame)`, the same update on the
+  frame Rust already holds (the command line's path), alternating in one process.
 - pyoctomap: `OcTree(CELL).insertPointCloud(points, origin, max_range=20, lazy_eval=False,
   discretize=True)`, as scripts/peers/octomap_bench.cpp calls OctoMap's C++. Its world
   points are computed before the clock from the same depth (the points sndt integrates).
@@ -36,17 +37,58 @@ def world_points(f):
     return np.ascontiguousarray(world), np.ascontiguousarray(pose[:3, 3])
 
 
-def time_sndt(frames, cell):
+def time_sndt(arrays, cell):
+    warm = sndt.Map(cell=cell)
+    for depth, labels, k, pose in arrays[:2]:
+        warm.integrate(depth, labels, intrinsics=k, pose=pose)
+    m = sndt.Map(cell=cell)
+    out = []
+    for depth, labels, k, pose in arrays:
+        t = time.perf_counter()
+        m.integrate(depth, labels, intrinsics=k, pose=pose)
+        out.append(1e3 * (time.perf_counter() - t))
+    return out
+
+
+def time_sndt_rust(frames, cell):
+    """The same update through `Map.integrate_frame`: the frame is already Rust's, so this
+    is the command line's update plus one call from Python, no arrays to check."""
     warm = sndt.Map(cell=cell)
     for f in frames[:2]:
-        warm.integrate(f.depth, f.labels, intrinsics=f.intrinsics, pose=f.pose)
+        warm.integrate_frame(f)
     m = sndt.Map(cell=cell)
     out = []
     for f in frames:
         t = time.perf_counter()
-        m.integrate(f.depth, f.labels, intrinsics=f.intrinsics, pose=f.pose)
+        m.integrate_frame(f)
         out.append(1e3 * (time.perf_counter() - t))
     return out
+
+
+def paired_overhead(arrays, frames, cell):
+    """Per frame, the arrays path into one map and the Rust-frame path into another, in
+    alternating order: the ratio of the two times for each frame (drift of the machine's
+    speed cancels out of each pair)."""
+    a, b = sndt.Map(cell=cell), sndt.Map(cell=cell)
+    ratios = []
+    for i, ((depth, labels, k, pose), f) in enumerate(zip(arrays, frames)):
+        def arrays_path():
+            t = time.perf_counter()
+            a.integrate(depth, labels, intrinsics=k, pose=pose)
+            return time.perf_counter() - t
+
+        def frame_path():
+            t = time.perf_counter()
+            b.integrate_frame(f)
+            return time.perf_counter() - t
+
+        if i % 2:
+            ta, tb = arrays_path(), frame_path()
+        else:
+            tb, ta = frame_path(), arrays_path()
+        ratios.append(ta / tb)
+    assert a.snapshot() == b.snapshot()
+    return ratios
 
 
 def time_pyoctomap(clouds, cell):
@@ -73,14 +115,23 @@ def main():
     args = p.parse_args()
     (traj,) = sndt.open_dataset(f"synthetic:1:{args.frames}").trajectories
     frames = list(traj)
+    # Every input is made before the clocks run (a Frame's arrays are copied out of Rust on
+    # each attribute access).
+    arrays = [(f.depth, f.labels, f.intrinsics, f.pose) for f in frames]
     clouds = [world_points(f) for f in frames]
     print(f"{len(frames)} frames of {frames[0].shape[1]}x{frames[0].shape[0]}, "
           f"{statistics.mean(len(c[0]) for c in clouds):,.0f} points each, cell {args.cell} m")
-    runs = {"sndt (Python)": [], "pyoctomap": []}
+    runs = {"sndt: Map.integrate(arrays)": [], "sndt: Map.integrate_frame (Rust's frame)": [],
+            "pyoctomap": []}
     for r in range(args.runs):
-        runs["sndt (Python)"].append(time_sndt(frames, args.cell))
+        runs["sndt: Map.integrate(arrays)"].append(time_sndt(arrays, args.cell))
+        runs["sndt: Map.integrate_frame (Rust's frame)"].append(time_sndt_rust(frames, args.cell))
         if not args.no_octomap:
             runs["pyoctomap"].append(time_pyoctomap(clouds, args.cell))
+    ratios = [r for _ in range(args.runs) for r in paired_overhead(arrays, frames, args.cell)]
+    print(f"Map.integrate(arrays) / Map.integrate_frame, per frame, alternating: median "
+          f"{statistics.median(ratios):.3f} (quartiles {statistics.quantiles(ratios, n=4)[0]:.3f}"
+          f"-{statistics.quantiles(ratios, n=4)[2]:.3f}, {len(ratios)} frames)")
     for name, per_run in runs.items():
         if not per_run:
             continue
