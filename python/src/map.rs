@@ -363,11 +363,19 @@ impl PyMap {
             return Err(PyValueError::new_err("stride must be at least 1"));
         }
         let frame = frame.frame.clone();
+        let t = frame.pose.translation.vector;
         self.with(py, |map| {
-            each_map!(map, m => sndt_host::semantic_map::integrate_frame(m, &frame, source, stride))
+            each_map!(map, m => {
+                // The pose's errors first, typed; what the core refuses after that is the
+                // image (its size, or more points than a frame may have).
+                sndt_core::validate_pose(&frame.pose)
+                    .and_then(|()| m.voxel_key(&[t.x, t.y, t.z]).map(|_| ()).ok_or(sndt_core::Error::PoseOutOfRange))
+                    .map_err(|e| core_error(&format!("integrate_frame {}", frame.id), e))?;
+                sndt_host::semantic_map::integrate_frame(m, &frame, source, stride)
+                    .map_err(|e| crate::errors::ImageError::new_err(format!("{e:#}")))
+            })
         })
         .map(PyFrameReport::from)
-        .map_err(|e| crate::errors::PoseError::new_err(format!("{e:#}")))
     }
 
     /// Renders what a pinhole camera at ``pose`` sees of the map: ``(labels, depth)``, both
