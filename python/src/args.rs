@@ -296,7 +296,7 @@ fn matrix_of(q: &Quaternion<f32>) -> Matrix3<f32> {
 /// whichever is larger.
 fn around(x: f32, n: i32, min_step: f32) -> impl Iterator<Item = f32> {
     let step = (x.next_up() - x).abs().max(min_step);
-    (0..=n).flat_map(move |k| [x + k as f32 * step, x - k as f32 * step])
+    std::iter::once(x).chain((1..=n).flat_map(move |k| [x + k as f32 * step, x - k as f32 * step]))
 }
 
 /// A quaternion near `q0` whose matrix is `r` exactly: first a grid of four steps either
@@ -310,46 +310,36 @@ fn search_quaternion(q0: &Quaternion<f32>, r: &Matrix3<f32>) -> Option<Quaternio
     let mut order = [0usize, 1, 2, 3];
     order.sort_by(|&a, &b| c[b].abs().total_cmp(&c[a].abs()));
     let [a, b, d, e] = order;
-    let with = |values: [(usize, f32); 4]| {
-        let mut q = *q0;
-        for (i, v) in values {
-            q.coords[i] = v;
-        }
-        q
-    };
-    let grid = |i: usize| -> Vec<f32> {
-        around(c[i], 4, if c[i].abs() < 0.25 { h } else { 0.0 }).collect()
-    };
-    let (ga, gb, gd, ge) = (grid(a), grid(b), grid(d), grid(e));
-    for &va in &ga {
-        for &vb in &gb {
-            for &vd in &gd {
-                for &ve in &ge {
-                    let q = with([(a, va), (b, vb), (d, vd), (e, ve)]);
-                    if matrix_of(&q) == *r {
-                        return Some(q);
+    // The first combination of one value per component (in `order`) whose matrix is `r`.
+    let first = |values: [&[f32]; 4]| {
+        for &va in values[0] {
+            for &vb in values[1] {
+                for &vd in values[2] {
+                    for &ve in values[3] {
+                        let mut q = *q0;
+                        for (i, v) in [(a, va), (b, vb), (d, vd), (e, ve)] {
+                            q.coords[i] = v;
+                        }
+                        if matrix_of(&q) == *r {
+                            return Some(q);
+                        }
                     }
                 }
             }
         }
+        None
+    };
+    let grid =
+        |i: usize, n: i32, min_step: f32| -> Vec<f32> { around(c[i], n, min_step).collect() };
+    let coarse = |i: usize| grid(i, 4, if c[i].abs() < 0.25 { h } else { 0.0 });
+    let (ga, gb, gd, ge) = (coarse(a), coarse(b), coarse(d), coarse(e));
+    if let Some(q) = first([&ga, &gb, &gd, &ge]) {
+        return Some(q);
     }
-    let fine = |i: usize| -> Vec<f32> { around(c[i], 2, 0.0).collect() };
-    let (fa, fb, fd) = (fine(a), fine(b), fine(d));
+    let (fa, fb, fd) = (grid(a, 2, 0.0), grid(b, 2, 0.0), grid(d, 2, 0.0));
     let steps = (2.0 * h / (h / 1024.0).max(c[e].next_up() - c[e])) as i32;
-    let scan: Vec<f32> = around(c[e], steps, h / 1024.0).collect();
-    for &va in &fa {
-        for &vb in &fb {
-            for &vd in &fd {
-                for &ve in &scan {
-                    let q = with([(a, va), (b, vb), (d, vd), (e, ve)]);
-                    if matrix_of(&q) == *r {
-                        return Some(q);
-                    }
-                }
-            }
-        }
-    }
-    None
+    let scan = grid(e, steps, h / 1024.0);
+    first([&fa, &fb, &fd, &scan])
 }
 
 /// An (N, 3) array of points: `float32` or `float64`, any order (it is copied to `f32`).
