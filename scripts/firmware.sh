@@ -26,6 +26,9 @@ FLASH_BUDGET=$(($(kib_of FLASH) * 1024))
 RAM_BUDGET=$(($(kib_of RAM) * 1024))
 
 step() { printf '\n==> %s\n' "$*"; }
+# The firmware's build lints it (clippy -D warnings, scripts/lib/lint.sh).
+. scripts/lib/lint.sh
+lint_in_builds
 
 step "firmware toolchain"
 if ! rustup target list --installed | grep -qx thumbv7em-none-eabihf; then
@@ -40,14 +43,14 @@ if ! command -v qemu-system-arm >/dev/null 2>&1; then
         qemu-system-arm qemu-utils/bookworm
 fi
 if ! command -v defmt-print >/dev/null 2>&1; then
-    cargo install defmt-print --locked
+    without_lints cargo install defmt-print --locked
 fi
 if ! command -v size >/dev/null 2>&1; then
     echo "error: 'size' (binutils) not found" >&2
     exit 1
 fi
 
-step "build firmware (release, thumbv7em-none-eabihf)"
+step "build and lint firmware (release, thumbv7em-none-eabihf)"
 # Its own workspace and .cargo/config.toml (target, runner, DEFMT_LOG): build from its dir.
 # Its own target dir too, whatever CARGO_TARGET_DIR the caller set, so $ELF is the fresh build.
 (cd "$FW_DIR" && CARGO_TARGET_DIR="$PWD/target" cargo build --release --locked)

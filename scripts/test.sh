@@ -5,7 +5,8 @@
 # QEMU), ROS 2 bags against the Python mcap packages, OctoMap exports read back by
 # liboctomap and compared voxel by voxel, every test (unit, property, integration, doc), and
 # the Python package (built and installed by pip, tested by pytest against the command line).
-# Installs what it needs; idempotent.
+# Clippy's lints run inside the builds (scripts/lib/lint.sh). Installs what it needs;
+# idempotent.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -18,20 +19,25 @@ if ! rustup target list --installed | grep -qx thumbv7em-none-eabihf; then
     rustup target add thumbv7em-none-eabihf
 fi
 
+# Every build below lints the crates it compiles, as `cargo clippy -- -D warnings` would
+# (scripts/lib/lint.sh): one compilation per crate instead of a check and a build.
+. scripts/lib/lint.sh
+lint_in_builds
+# Builds here start from nothing on CI: incremental compilation only adds work to those.
+export CARGO_INCREMENTAL=0
+
 step "cargo fmt --check"
 cargo fmt --all -- --check
 
-step "cargo clippy -D warnings"
-cargo clippy --workspace --all-targets -- -D warnings
-cargo clippy -p sndt-core --target thumbv7em-none-eabihf --features defmt -- -D warnings
+step "build and lint the workspace, every target (clippy -D warnings while it compiles)"
+cargo test --workspace --all-targets --no-run
 
-step "sndt-core builds for thumbv7em-none-eabihf (no_std, no alloc)"
+step "sndt-core builds and lints for thumbv7em-none-eabihf (no_std, no alloc)"
 cargo build -p sndt-core --target thumbv7em-none-eabihf --release
 cargo build -p sndt-core --target thumbv7em-none-eabihf --release --features defmt
 
 step "Cortex-M4F firmware: fmt, clippy, build, size, run in QEMU, CRC vs host, memory report"
-(cd targets/cortex-m4f && cargo fmt --check && cargo clippy --release --locked -- -D warnings &&
-    cargo clippy --release --locked --features rtt -- -D warnings)
+(cd targets/cortex-m4f && cargo fmt --check && cargo clippy --release --locked --features rtt -- -D warnings)
 bash scripts/firmware.sh
 
 step "C API: header drift, C99 and C++17 programs (same CRCs), bad calls, C firmware in QEMU"

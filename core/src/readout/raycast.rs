@@ -644,7 +644,9 @@ pub(crate) mod tests {
                 state as f32 / u32::MAX as f32
             };
             let mut hits = 0;
-            for i in 0..2000 {
+            // 800 rays: a quarter of them with an unbounded max_t, which the reference
+            // walks to the end of the key range when they miss (most of the test's time).
+            for i in 0..800 {
                 let o = Point3::new(rnd() * 8.0 - 1.0, rnd() * 7.0 - 1.0, rnd() * 4.0 - 0.6);
                 let d = Vector3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5);
                 let max_t = [20.0, 1.0, 0.3, f32::INFINITY][i % 4];
@@ -657,7 +659,7 @@ pub(crate) mod tests {
                 );
                 hits += got.is_some() as usize;
             }
-            assert!(hits > 400, "{hits}");
+            assert!(hits > 160, "{hits}");
         });
     }
 
