@@ -7,9 +7,14 @@
 # The wheel is built with cargo's dev profile (MATURIN_PEP517_ARGS), so it shares the
 # compiled sndt-core and sndt-host with `cargo test`; `pip install ./python` without it
 # builds in release, as a user gets it.
+#
+# That build is also where the package's crate is linted (clippy -D warnings inside the
+# build, scripts/lib/lint.sh): the workspace's build step leaves it to this one.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 . scripts/lib/install.sh
+. scripts/lib/lint.sh
+lint_in_builds
 
 step() { printf '\n==> %s\n' "$*"; }
 TARGET="${CARGO_TARGET_DIR:-$PWD/target}"

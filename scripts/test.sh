@@ -26,11 +26,61 @@ lint_in_builds
 # Builds here start from nothing on CI: incremental compilation only adds work to those.
 export CARGO_INCREMENTAL=0
 
+# Background jobs (below) run in sessions of their own, so that a failing step stops each
+# with everything it started; their logs go to $tmp.
+bg_pids=()
+tmp="$(mktemp -d)"
+cleanup() {
+    local pid
+    for pid in "${bg_pids[@]}"; do kill -- "-$pid" 2>/dev/null || true; done
+    rm -rf "$tmp"
+}
+trap cleanup EXIT
+# background NAME COMMAND...: starts COMMAND with its output in $tmp/NAME.log.
+background() {
+    local name=$1
+    shift
+    setsid "$@" >"$tmp/$name.log" 2>&1 &
+    bg_pids+=("$!")
+    printf -v "${name}_pid" %s "$!"
+}
+# await NAME: waits for the background job NAME, prints its output, fails if it failed.
+await() {
+    local rc=0 pid_var="${1}_pid"
+    wait "${!pid_var}" || rc=$?
+    cat "$tmp/$1.log"
+    if [ "$rc" -ne 0 ]; then
+        echo "error: the background job '$1' failed (exit $rc)" >&2
+        exit 1
+    fi
+}
+
 step "cargo fmt --check"
 cargo fmt --all -- --check
 
-step "build and lint the workspace, every target (clippy -D warnings while it compiles)"
-cargo test --workspace --all-targets --no-run
+# The Python venvs of the ROS 2, OctoMap and Python steps are downloads, not CPU: they fill
+# while the workspace compiles.
+step "in the background: the Python venvs (target/ros-venv, target/python-venv)"
+background venvs bash -c '. scripts/lib/install.sh && ensure_ros_venv target/ros-venv &&
+    ensure_python_venv "${CARGO_TARGET_DIR:-$PWD/target}/python-venv"'
+
+step "build and lint the workspace: tests, binaries, examples, benches (clippy -D warnings)"
+cargo test --workspace --no-run
+cargo test --workspace --benches --no-run
+# The Python package is built (and linted) by pip in its own step, as a Python module.
+
+step "the Python venvs"
+await venvs
+
+# The fuzz smoke builds in its own target directory (fuzz/target), so it runs beside the
+# next steps, which spend much of their time in one process at a time (QEMU, Python, C++,
+# libFuzzer) on the 2 cores. Its C++ compiler is installed first, in the foreground, as
+# apt-get takes one install at a time.
+step "in the background: fuzzing smoke (fmt, a linted instrumented build, every target)"
+if ! command -v c++ >/dev/null 2>&1; then
+    (. scripts/lib/install.sh && apt_install g++)
+fi
+background fuzz bash scripts/fuzz.sh --smoke
 
 step "sndt-core builds and lints for thumbv7em-none-eabihf (no_std, no alloc)"
 cargo build -p sndt-core --target thumbv7em-none-eabihf --release
@@ -52,15 +102,14 @@ bash scripts/octomap.sh
 step "aarch64: sndt-core tests (unit, property, doc) and the CRC check under qemu-aarch64"
 bash scripts/aarch64.sh
 
-step "fuzzing smoke: fmt and clippy of fuzz/, every target over its corpus plus bounded runs"
-bash scripts/fuzz.sh --smoke
+step "fuzzing smoke: every target over its corpus plus bounded runs (run beside the steps above)"
+await fuzz
 
 step "cargo doc without warnings"
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --quiet
 
 step "cargo test (workspace: unit, property, integration, doc tests)"
-log="$(mktemp)"
-trap 'rm -f "$log"' EXIT
+log="$tmp/test.log"
 cargo test --workspace 2>&1 | tee "$log"
 step "Python package: pip install ./python, pytest against the command line, the example"
 bash scripts/python.sh

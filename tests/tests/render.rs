@@ -37,44 +37,49 @@ fn pinhole(frame: &Frame) -> Pinhole {
     }
 }
 
-/// One `raycast` per pixel along the render's ray (camera ray rotated, not normalised),
-/// rows split over two threads.
-fn raycast_image<const V: usize, const B: usize, const C: usize>(
+/// The pixels the per-pixel rays check: those with `(x + y) % 3 == 0`, a third of the
+/// image. Every row and every column has them, at every offset within a render tile, so a
+/// fault confined to some rows, columns or tile positions still shows; casting every pixel
+/// made this the test suite's longest test.
+fn sampled(cam: &Pinhole) -> Vec<usize> {
+    let w = cam.width as usize;
+    (0..w * cam.height as usize)
+        .filter(|p| (p % w + p / w).is_multiple_of(3))
+        .collect()
+}
+
+/// One `raycast` along the render's ray (camera ray rotated, not normalised) for each pixel
+/// of `pixels`, split over two threads: (label, distance) per pixel, in their order.
+fn raycast_pixels<const V: usize, const B: usize, const C: usize>(
     map: &Map<V, B, C>,
     frame: &Frame,
-) -> (Vec<u8>, Vec<f32>) {
+    pixels: &[usize],
+) -> Vec<(u8, f32)> {
     let cam = pinhole(frame);
     let w = cam.width as usize;
-    let n = w * cam.height as usize;
-    let (mut labels, mut dist) = (vec![0u8; n], vec![0f32; n]);
     let origin = Point3::from(frame.pose.translation.vector);
     let rot = frame.pose.rotation.to_rotation_matrix();
-    let half = (cam.height as usize).div_ceil(2) * w;
+    let mut out = vec![(0u8, 0f32); pixels.len()];
+    let half = pixels.len().div_ceil(2);
     std::thread::scope(|s| {
-        for (k, (ls, ds)) in labels
-            .chunks_mut(half)
-            .zip(dist.chunks_mut(half))
-            .enumerate()
-        {
+        for (ps, os) in pixels.chunks(half).zip(out.chunks_mut(half)) {
             s.spawn(move || {
-                for (i, (l, d)) in ls.iter_mut().zip(ds.iter_mut()).enumerate() {
-                    let p = k * half + i;
+                for (&p, o) in ps.iter().zip(os.iter_mut()) {
                     let r = cam.ray((p % w) as u32, (p / w) as u32);
                     let dir = rot * Vector3::new(r[0], r[1], r[2]);
                     let hit = map.raycast(&origin, &dir, map.config().max_range);
-                    *l = hit.map_or(INVALID_LABEL, |h| h.class);
-                    *d = hit.map_or(0.0, |h| h.t);
+                    *o = hit.map_or((INVALID_LABEL, 0.0), |h| (h.class, h.t));
                 }
             });
         }
     });
-    (labels, dist)
+    out
 }
 
 /// At 10 cm (the demo's cell) on frames a quarter and three quarters into the walk, and
-/// at 5 cm half way: at least 99.9% of the pixels get the per-pixel ray's label, and where both
-/// hit the distances differ by at most 1 mm. (The two agree bit for bit on these frames
-/// today; the bound is what a change of arithmetic may use.)
+/// at 5 cm half way, over the sampled pixels: at least 99.9% get the per-pixel ray's
+/// label, and where both hit the distances differ by at most 1 mm. (The two agree bit for
+/// bit on these frames today; the bound is what a change of arithmetic may use.)
 #[test]
 fn render_gives_what_a_raycast_per_pixel_gives() {
     for (cell, which) in [(0.10f32, &[5usize, 15][..]), (0.05, &[10][..])] {
@@ -85,28 +90,31 @@ fn render_gives_what_a_raycast_per_pixel_gives() {
             let (mut labels, mut dist) = (vec![0u8; n], vec![0f32; n]);
             map.render(&frame.pose, &cam, &mut labels, &mut dist)
                 .unwrap();
-            let (want_l, want_d) = raycast_image(map.as_ref(), frame);
-            let same = labels.iter().zip(&want_l).filter(|(a, b)| a == b).count();
-            let identical = (0..n)
-                .filter(|&i| labels[i] == want_l[i] && dist[i].to_bits() == want_d[i].to_bits())
+            let pixels = sampled(&cam);
+            let want = raycast_pixels(map.as_ref(), frame, &pixels);
+            let m = pixels.len();
+            let same = pixels
+                .iter()
+                .zip(&want)
+                .filter(|&(&p, w)| labels[p] == w.0)
                 .count();
-            let hits = want_l.iter().filter(|&&l| l != INVALID_LABEL).count();
+            let identical = pixels
+                .iter()
+                .zip(&want)
+                .filter(|&(&p, w)| labels[p] == w.0 && dist[p].to_bits() == w.1.to_bits())
+                .count();
+            let hits = want.iter().filter(|w| w.0 != INVALID_LABEL).count();
             println!(
-                "{cell} m, {}: {same} of {n} labels, {identical} identical",
+                "{cell} m, {}: {same} of {m} sampled labels, {identical} identical",
                 frame.id
             );
-            assert!(hits > n * 9 / 10, "{}: only {hits} hits", frame.id);
-            assert!(same * 1000 >= n * 999, "{}: {same} of {n} labels", frame.id);
-            for i in 0..n {
-                if labels[i] != INVALID_LABEL && want_l[i] != INVALID_LABEL {
-                    let e = (dist[i] - want_d[i]).abs();
-                    assert!(
-                        e <= 1e-3,
-                        "{} pixel {i}: {} vs {}",
-                        frame.id,
-                        dist[i],
-                        want_d[i]
-                    );
+            assert!(m * 3 >= n, "{m} of {n} pixels sampled");
+            assert!(hits > m * 9 / 10, "{}: only {hits} hits", frame.id);
+            assert!(same * 1000 >= m * 999, "{}: {same} of {m} labels", frame.id);
+            for (&p, &(l, d)) in pixels.iter().zip(&want) {
+                if labels[p] != INVALID_LABEL && l != INVALID_LABEL {
+                    let e = (dist[p] - d).abs();
+                    assert!(e <= 1e-3, "{} pixel {p}: {} vs {d}", frame.id, dist[p]);
                 }
             }
         }
