@@ -56,10 +56,10 @@ impl<const N: usize> PrepCache<N> {
     pub(crate) fn get(&mut self, slot: usize, prepare: impl FnOnce() -> Prepared) -> Prepared {
         let i = slot % N;
         let tag = slot as u32 + 1;
-        if let Some(g) = self.entries[i] {
-            if self.tags[i] == tag {
-                return g;
-            }
+        if let Some(g) = self.entries[i]
+            && self.tags[i] == tag
+        {
+            return g;
         }
         let g = prepare();
         self.tags[i] = tag;

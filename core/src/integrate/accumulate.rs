@@ -127,10 +127,10 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         (n, w): (u32, &[u64; 3]),
         (class, votes): (u8, u32),
     ) {
-        if votes > 0 {
-            if let Some(v) = self.voxels.slots.get_mut(slot) {
-                v.take_votes(class, votes);
-            }
+        if votes > 0
+            && let Some(v) = self.voxels.slots.get_mut(slot)
+        {
+            v.take_votes(class, votes);
         }
         if n > 0 {
             if acc == DROPPED {

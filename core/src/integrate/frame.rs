@@ -372,10 +372,10 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     #[inline(always)]
     pub(crate) fn note_missed(f: &mut FrameState, packed: u64, bit: u64) {
         let c = block_cache_index(packed);
-        if f.block_cache.get(c).is_some_and(|e| e.0 == packed) {
-            if let Some(m) = f.missed_copy.get_mut(c) {
-                *m |= bit;
-            }
+        if f.block_cache.get(c).is_some_and(|e| e.0 == packed)
+            && let Some(m) = f.missed_copy.get_mut(c)
+        {
+            *m |= bit;
         }
     }
 

@@ -231,10 +231,10 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             if t_enter > max_t + reach {
                 break;
             }
-            if let Some(best) = ray.best {
-                if t_enter > best.t + reach {
-                    break;
-                }
+            if let Some(best) = ray.best
+                && t_enter > best.t + reach
+            {
+                break;
             }
             dda.advance(a);
             // Only the 9 cells of the neighbourhood's new face are unseen.
@@ -417,10 +417,10 @@ pub(crate) mod tests {
             if t_enter > max_t + 2.5 * h {
                 break;
             }
-            if let Some(best) = probe.best {
-                if t_enter > best.t + 2.5 * h {
-                    break;
-                }
+            if let Some(best) = probe.best
+                && t_enter > best.t + 2.5 * h
+            {
+                break;
             }
             dda.advance(a);
             let (b, c) = ((a + 1) % 3, (a + 2) % 3);

@@ -338,7 +338,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 .cells
                 .iter()
                 .enumerate()
-                .filter(|(_, &l)| l != 0)
+                .filter(|&(_, &l)| l != 0)
                 .map(move |(i, &l)| {
                     (
                         VoxelKey::from_block_cell(packed, i as u32),

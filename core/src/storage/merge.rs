@@ -318,10 +318,10 @@ fn settle_scatter<const C: usize>(v: &mut Voxel<C>, qhalf: i64) {
     // Diagonal entries xx, yy, zz sit at 0, 3, 5 of S2.
     for (k, i) in [(0, 0), (3, 1), (5, 2)] {
         let s1i = s1.get(i).copied().unwrap_or(0);
-        if let Some(s) = v.s2.get_mut(k) {
-            if n * (*s as i64) < s1i * s1i {
-                *s = (s1i * s1i + n - 1).div_euclid(n).min(bound) as i32;
-            }
+        if let Some(s) = v.s2.get_mut(k)
+            && n * (*s as i64) < s1i * s1i
+        {
+            *s = (s1i * s1i + n - 1).div_euclid(n).min(bound) as i32;
         }
     }
     let m = scatter(n, &s1, &v.s2.map(|x| x as i64));

@@ -162,14 +162,14 @@ impl ExperimentArgs {
             dataset = Box::new(Every::new(dataset, self.every));
         }
         println!("sndt experiment: {}", dataset.describe());
-        if self.labels != ExperimentLabels::Gt {
-            if let Some(place) = dataset.missing_predictions() {
-                let option = format!("{:?}", self.labels).to_lowercase();
-                bail!(
-                    "--labels {option}: {} has no predictions: {place}",
-                    self.dataset
-                );
-            }
+        if self.labels != ExperimentLabels::Gt
+            && let Some(place) = dataset.missing_predictions()
+        {
+            let option = format!("{:?}", self.labels).to_lowercase();
+            bail!(
+                "--labels {option}: {} has no predictions: {place}",
+                self.dataset
+            );
         }
         Ok(dataset)
     }

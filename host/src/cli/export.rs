@@ -181,11 +181,11 @@ fn map_first_trajectory(a: &ExportArgs, mut bag: Option<&mut MapBag>) -> Result<
             .stamp(&frame.id)
             .map_or(frame_time(k), Time::from_nanos);
         unwritten = Some(stamp);
-        if let Some(b) = bag.as_deref_mut() {
-            if a.mcap_interval.is_some_and(|n| (k + 1) % n == 0) {
-                b.write(map.as_ref(), stamp)?;
-                unwritten = None;
-            }
+        if let Some(b) = bag.as_deref_mut()
+            && a.mcap_interval.is_some_and(|n| (k + 1) % n == 0)
+        {
+            b.write(map.as_ref(), stamp)?;
+            unwritten = None;
         }
         bar.inc(1);
     }

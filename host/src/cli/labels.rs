@@ -42,14 +42,14 @@ impl From<LabelArg> for LabelSource {
 /// assert!(check_labels(LabelArg::Gt, &plain, "synthetic").is_ok());
 /// ```
 pub fn check_labels(labels: LabelArg, dataset: &dyn Dataset, name: &str) -> anyhow::Result<()> {
-    if matches!(labels, LabelArg::Pred | LabelArg::PredTopk) {
-        if let Some(place) = dataset.missing_predictions() {
-            let option = labels.to_possible_value().map(|v| v.get_name().to_string());
-            anyhow::bail!(
-                "--labels {}: {name} has no predictions: {place}",
-                option.unwrap_or_default()
-            );
-        }
+    if matches!(labels, LabelArg::Pred | LabelArg::PredTopk)
+        && let Some(place) = dataset.missing_predictions()
+    {
+        let option = labels.to_possible_value().map(|v| v.get_name().to_string());
+        anyhow::bail!(
+            "--labels {}: {name} has no predictions: {place}",
+            option.unwrap_or_default()
+        );
     }
     Ok(())
 }

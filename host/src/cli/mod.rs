@@ -125,8 +125,10 @@ mod tests {
                     problems.push(format!(
                         "the example of sndt {name} is another command: {line}"
                     ));
-                } else if let Err(e) = Cli::try_parse_from(line.split_whitespace()) {
-                    problems.push(format!("the example `{line}` does not parse: {e}"));
+                } else {
+                    if let Err(e) = Cli::try_parse_from(line.split_whitespace()) {
+                        problems.push(format!("the example `{line}` does not parse: {e}"));
+                    }
                 }
             }
         }

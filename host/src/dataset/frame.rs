@@ -278,10 +278,10 @@ impl Frame {
                 self.depth.len()
             );
         }
-        if let Rays::PerPixel { dirs, .. } = self.rays.as_ref() {
-            if dirs.len() != n {
-                bail!("{}: {} rays for {n} pixels", self.id, dirs.len());
-            }
+        if let Rays::PerPixel { dirs, .. } = self.rays.as_ref()
+            && dirs.len() != n
+        {
+            bail!("{}: {} rays for {n} pixels", self.id, dirs.len());
         }
         if let Some(l) = &self.labels {
             if l.len() != n {
@@ -291,14 +291,14 @@ impl Frame {
                 bail!("{}: label {bad} is outside 0..=40", self.id);
             }
         }
-        if let Some(p) = &self.predictions {
-            if p.classes.len() != n || p.scores.len() != n {
-                bail!(
-                    "{}: predictions have {} pixels, depth has {n}",
-                    self.id,
-                    p.classes.len()
-                );
-            }
+        if let Some(p) = &self.predictions
+            && (p.classes.len() != n || p.scores.len() != n)
+        {
+            bail!(
+                "{}: predictions have {} pixels, depth has {n}",
+                self.id,
+                p.classes.len()
+            );
         }
         if validate_pose(&self.pose).is_err() {
             bail!(

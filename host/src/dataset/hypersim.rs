@@ -308,10 +308,10 @@ fn sorted_dirs(dir: &Path) -> Result<Vec<String>> {
     let mut out = Vec::new();
     for e in std::fs::read_dir(dir).with_context(|| format!("listing {}", dir.display()))? {
         let e = e.with_context(|| format!("listing {}", dir.display()))?;
-        if e.path().is_dir() {
-            if let Some(name) = e.file_name().to_str() {
-                out.push(name.to_string());
-            }
+        if e.path().is_dir()
+            && let Some(name) = e.file_name().to_str()
+        {
+            out.push(name.to_string());
         }
     }
     out.sort();
@@ -332,10 +332,9 @@ fn depth_indices(dir: &Path) -> Result<Vec<u32>> {
         if let Some(n) = name
             .strip_prefix("frame.")
             .and_then(|s| s.strip_suffix(".depth_meters.hdf5"))
+            && let Ok(i) = n.parse()
         {
-            if let Ok(i) = n.parse() {
-                out.push(i);
-            }
+            out.push(i);
         }
     }
     out.sort_unstable();

@@ -183,11 +183,12 @@ impl DrawTarget for Canvas {
         I: IntoIterator<Item = Pixel<Rgb888>>,
     {
         for Pixel(p, c) in pixels {
-            if let (Ok(x), Ok(y)) = (u32::try_from(p.x), u32::try_from(p.y)) {
-                if x < self.width && y < self.height {
-                    let o = self.offset(x, y);
-                    self.rgb[o..o + 3].copy_from_slice(&[c.r(), c.g(), c.b()]);
-                }
+            if let (Ok(x), Ok(y)) = (u32::try_from(p.x), u32::try_from(p.y))
+                && x < self.width
+                && y < self.height
+            {
+                let o = self.offset(x, y);
+                self.rgb[o..o + 3].copy_from_slice(&[c.r(), c.g(), c.b()]);
             }
         }
         Ok(())

@@ -1427,7 +1427,7 @@ mod tests {
         let mut voxels = HashSet::new();
         for p in &walks()[0] {
             let r = render(floor(), p, &cam);
-            for (i, &z) in r.planar.iter().enumerate().filter(|(_, &z)| z > 0.0) {
+            for (i, &z) in r.planar.iter().enumerate().filter(|&(_, &z)| z > 0.0) {
                 let ray = cam.ray(i as u32 % cam.width, i as u32 / cam.width);
                 let v = p * Point3::new(ray[0] * z, ray[1] * z, z);
                 voxels.insert([v.x, v.y, v.z].map(|c| (c / 0.1).floor() as i32));

@@ -1147,10 +1147,10 @@ impl Builder {
         if self.cabinet(DRESSER, w, 0.5, 0.85).is_some() {
             self.picture(None);
         }
-        if self.chance(0.3) {
-            if let Some(pl) = self.cabinet(DRESSER, 0.9, 0.45, 0.8) {
-                self.clutter(&pl, 0.05, 0.85, 0.05, 0.4, 0.8, 2);
-            }
+        if self.chance(0.3)
+            && let Some(pl) = self.cabinet(DRESSER, 0.9, 0.45, 0.8)
+        {
+            self.clutter(&pl, 0.05, 0.85, 0.05, 0.4, 0.8, 2);
         }
         let w = self.r(0.9, 1.6);
         self.cabinet(CABINET, w, 0.6, 2.0);
