@@ -40,6 +40,10 @@ export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64 -L /usr/aarch
 # Emulated debug code is 30-100x slower than native: optimise the test builds (the test
 # profile keeps debug assertions and overflow checks on, as in the x86-64 `cargo test`).
 export CARGO_PROFILE_TEST_OPT_LEVEL=2
+# The core's doctests are merged into one program (edition 2024); under the emulator they
+# run as threads of one process, not one process each, and the crate example's map (a
+# 485 KB `Map` on the stack) overflows a test thread's default 2 MiB stack there.
+export RUST_MIN_STACK=16777216
 
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT
