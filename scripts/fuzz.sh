@@ -105,7 +105,7 @@ smoke() {
     step "smoke: each target over its corpus, then $SMOKE_RUNS runs (at most ${SMOKE_SECONDS}s)"
     # Two targets at a time (one per core; each libFuzzer process is single-threaded), their
     # lines printed in the targets' order.
-    local failed=0 i t out pids=()
+    local failed=0 i t pid out pids=()
     out=$(mktemp -d)
     for ((i = 0; i < ${#TARGETS[@]}; i += 2)); do
         pids=()
@@ -113,7 +113,7 @@ smoke() {
             run "$t" -runs="$SMOKE_RUNS" -max_total_time="$SMOKE_SECONDS" >"$out/$t" 2>&1 &
             pids+=($!)
         done
-        for t in "${pids[@]}"; do wait "$t" || failed=1; done
+        for pid in "${pids[@]}"; do wait "$pid" || failed=1; done
         for t in "${TARGETS[@]:i:2}"; do cat "$out/$t"; done
     done
     rm -rf "$out"
