@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# The C API (targets/c): Rust fmt, clippy (inside its builds) and unit tests of sndt-c; the
-# committed header include/sndt.h against a fresh cbindgen generation (drift check); the C99 and C++17 host
-# programs built with CMake (-Wall -Wextra -Werror -pedantic) and run by ctest: the test
-# vector's snapshot and render CRCs from C, the snapshot CRC from C++, and the bad calls from
-# C; then the bare C firmware on Cortex-M4F in QEMU (scripts/c-firmware.sh). Installs what
-# it needs when missing (cmake via apt-get, cbindgen via cargo install); idempotent.
+# The C API (targets/c): Rust fmt, clippy (inside its builds) and unit tests of sndt-c;
+# the committed header include/sndt.h against a fresh cbindgen generation (drift check);
+# the C99 and C++17 host programs built with CMake (-Wall -Wextra -Werror -pedantic) and
+# run by ctest: the test vector's snapshot and render CRCs from C, the snapshot CRC from
+# C++, and the bad calls from C; then the bare C firmware on Cortex-M4F in QEMU
+# (scripts/c-firmware.sh). Installs what it needs when missing (cmake via apt-get,
+# cbindgen via cargo install); idempotent.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
