@@ -11,7 +11,7 @@ use sndt_core::Config;
 use sndt_host::baselines::bki::{BkiConfig, BkiMap, Readout};
 use sndt_host::dataset::open_spec;
 use sndt_host::dataset::{Frame, LabelSource};
-use sndt_host::semantic_map::{integrate_frame, HostMap};
+use sndt_host::mapping::{integrate_frame, HostMap};
 use std::time::Instant;
 
 fn main() {
@@ -41,7 +41,7 @@ fn main() {
     );
     for cell in [0.05f32, 0.10, 0.15, 0.20] {
         let mut map: Box<HostMap> =
-            sndt_host::semantic_map::boxed_map(Config::with_cell_size(cell)).expect("valid config");
+            sndt_host::mapping::boxed_map(Config::with_cell_size(cell)).expect("valid config");
         let t = Instant::now();
         for f in &frames {
             integrate_frame(map.as_mut(), f, LabelSource::Gt, 1).expect("frame integrates");

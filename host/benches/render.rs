@@ -8,7 +8,7 @@
 
 use sndt_core::{Config, INVALID_LABEL};
 use sndt_host::dataset::synthetic::room::{orbit, Scene, HYPERSIM_CAMERA};
-use sndt_host::semantic_map::HostMap;
+use sndt_host::mapping::HostMap;
 use std::time::Instant;
 
 fn main() {
@@ -41,7 +41,7 @@ fn main() {
     );
     for cell in cells {
         let mut map: Box<HostMap> =
-            sndt_host::semantic_map::boxed_map(Config::with_cell_size(cell)).expect("valid config");
+            sndt_host::mapping::boxed_map(Config::with_cell_size(cell)).expect("valid config");
         for (pose, (depth, labels)) in poses.iter().zip(&frames) {
             let img = sndt_host::dataset::synthetic::room::depth_image(&cam, depth, labels);
             let r = map.integrate_depth(pose, &img).expect("frame integrates");

@@ -15,7 +15,7 @@ use anyhow::{bail, Context, Result};
 use sndt_core::Occupancy;
 use sndt_host::dataset::classes::color;
 use sndt_host::eval::evaluate::load_snapshot;
-use sndt_host::semantic_map::HostMap;
+use sndt_host::mapping::HostMap;
 use std::collections::HashSet;
 
 /// One leaf as check_octomap.cpp lists it.

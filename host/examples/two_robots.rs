@@ -10,7 +10,7 @@ use sndt_core::{Config, Occupancy};
 use sndt_host::dataset::{open_spec, Dataset, LabelSource};
 use sndt_host::eval::evaluate::gt_depth;
 use sndt_host::eval::metrics::Confusion;
-use sndt_host::semantic_map::{backproject, boxed_map, integrate_frame, HostMap};
+use sndt_host::mapping::{backproject, boxed_map, integrate_frame, HostMap};
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();

@@ -14,8 +14,8 @@
 //! | layer | modules | role |
 //! |---|---|---|
 //! | 1 | [`atomic`] | the shared leaf: every file is written atomically (temporary file, fsync, rename) |
-//! | 2 | [`dataset`] | readers: one [`Frame`](dataset::Frame) type for synthetic scenes, the prepared layout, raw Hypersim, `.npy` predictions and ROS 2 bags ([`dataset::ros`]) |
-//! | 3 | [`semantic_map`], [`global_map`] | the [`SemanticMap`](semantic_map::SemanticMap) trait every mapper implements, and the core's side of it; the host map that grows, and a device map spilling into it |
+//! | 2 | [`dataset`] | readers: one [`Frame`](dataset::Frame) type for the prepared layout, raw Hypersim, `.npy` predictions and ROS 2 bags ([`dataset::ros`]), and for the synthetic scenes ([`dataset::synthetic`]), which are rendered rather than read but give the same frames, so the renderer sits in this layer beside the readers it stands in for |
+//! | 3 | [`mapping`] | maps as the host runs them, a file per job: the [`SemanticMap`](mapping::SemanticMap) trait every mapper implements and the core's side of it; the host map that grows; record-stream checks; a device map spilling into it; the device capacities |
 //! | 4 | [`reference`](mod@reference), [`baselines`] | the other mappers: S-NDT in plain `f64` (the core's test oracle); S-BKI and OS-BKI |
 //! | 5 | [`output`] | writers: PNG pictures, SVG charts, PLY, point files, OctoMap trees ([`output::octomap`]), ROS 2 bags of frames and maps ([`output::ros`]), progress bars |
 //! | 6 | [`eval`], [`embedded`] | the jobs: the paper's metrics, the evaluation loop, the experiment, core-vs-reference; memory budget and the firmware's test vector |
@@ -29,9 +29,8 @@ pub mod cli;
 pub mod dataset;
 pub mod embedded;
 pub mod eval;
-pub mod global_map;
+pub mod mapping;
 pub mod output;
 pub mod reference;
-pub mod semantic_map;
 
-pub use semantic_map::boxed_map;
+pub use mapping::boxed_map;

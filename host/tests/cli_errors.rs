@@ -333,7 +333,7 @@ fn config_errors_name_the_option_and_the_field() {
 #[test]
 fn a_snapshot_with_an_absurd_max_range_is_refused() {
     let dir = temp_dir("snapshot");
-    let map = sndt_host::semantic_map::boxed_map::<64, 16, 40>(sndt_core::Config::DEFAULT).unwrap();
+    let map = sndt_host::mapping::boxed_map::<64, 16, 40>(sndt_core::Config::DEFAULT).unwrap();
     let mut bytes = vec![0; map.snapshot_len()];
     map.write_snapshot(&mut bytes).unwrap();
     let mut header = sndt_core::SnapshotHeader::read(&bytes).unwrap();

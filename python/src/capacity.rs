@@ -3,7 +3,7 @@
 
 use anyhow::Result;
 use sndt_core::{Config, Map};
-use sndt_host::semantic_map::boxed_map;
+use sndt_host::mapping::boxed_map;
 
 /// The 40 NYU40 classes, as the command line's maps.
 pub const CLASSES: usize = 40;
@@ -20,7 +20,7 @@ pub const CAPACITIES: [(usize, usize); 6] = [
     (1 << 23, 1 << 21),
 ];
 
-/// The command line's map: 2^19 voxels, 2^17 blocks (`sndt_host::semantic_map::HostMap`).
+/// The command line's map: 2^19 voxels, 2^17 blocks (`sndt_host::mapping::HostMap`).
 pub const DEFAULT: (usize, usize) = (1 << 19, 1 << 17);
 
 /// A core map of one of the [`CAPACITIES`].

@@ -382,7 +382,7 @@ pub fn evaluate(
             let rendered = map
                 .get()
                 .with(py, |m| {
-                    crate::each_map!(m, m => sndt_host::semantic_map::backproject(m.as_ref(), &frame))
+                    crate::each_map!(m, m => sndt_host::mapping::backproject(m.as_ref(), &frame))
                 })
                 .map_err(|e| DatasetError::new_err(format!("{e:#}")))?;
             total.add_frame(gt, &rendered, &gt_depth(&frame));

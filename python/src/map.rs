@@ -371,7 +371,7 @@ impl PyMap {
                 sndt_core::validate_pose(&frame.pose)
                     .and_then(|()| m.voxel_key(&[t.x, t.y, t.z]).map(|_| ()).ok_or(sndt_core::Error::PoseOutOfRange))
                     .map_err(|e| core_error(&format!("integrate_frame {}", frame.id), e))?;
-                sndt_host::semantic_map::integrate_frame(m, &frame, source, stride)
+                sndt_host::mapping::integrate_frame(m, &frame, source, stride)
                     .map_err(|e| crate::errors::ImageError::new_err(format!("{e:#}")))
             })
         })

@@ -12,7 +12,7 @@ type M = Map<4096, 2048, 40>;
 
 /// A map with one room frame in it.
 fn populated() -> Box<M> {
-    let mut map = sndt_host::semantic_map::boxed_map::<4096, 2048, 40>(Config::DEFAULT).unwrap();
+    let mut map = sndt_host::mapping::boxed_map::<4096, 2048, 40>(Config::DEFAULT).unwrap();
     let pose = sndt_host::dataset::synthetic::room::orbit(6)[2];
     let pts = room_frame(&pose, &camera(32, 24));
     let r = map.integrate(&pose, &pts).unwrap();
@@ -597,7 +597,7 @@ fn raycast_with_unbounded_range() {
     let cam = camera(64, 48);
     let depth = vec![2.05f32; 64 * 48];
     let labels = vec![3u8; 64 * 48];
-    let mut map = sndt_host::semantic_map::boxed_map::<1024, 512, 4>(Config::DEFAULT).unwrap();
+    let mut map = sndt_host::mapping::boxed_map::<1024, 512, 4>(Config::DEFAULT).unwrap();
     map.integrate_depth(&Isometry3::identity(), &depth_image(cam, &depth, &labels))
         .unwrap();
     let o = Point3::new(0.05, 0.05, 0.0);

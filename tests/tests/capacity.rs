@@ -74,7 +74,7 @@ fn step(map: &mut Tiny, totals: &mut Totals, pose: &Isometry3<f32>, points: &[La
     }
     // The map stays internally consistent: its snapshot passes every read check.
     let snap = snapshot(map);
-    let mut copy: Box<Tiny> = sndt_host::semantic_map::boxed_map(*map.config()).unwrap();
+    let mut copy: Box<Tiny> = sndt_host::mapping::boxed_map(*map.config()).unwrap();
     copy.read_snapshot(&snap).unwrap();
     assert_eq!(copy.checksum(), map.checksum());
 }

@@ -183,7 +183,7 @@ proptest! {
 
         let mut cfg = Config::with_cell_size(h);
         cfg.miss_model = MissModel::Constant;
-        let mut map = sndt_host::semantic_map::boxed_map::<16, 512, 4>(cfg).unwrap();
+        let mut map = sndt_host::mapping::boxed_map::<16, 512, 4>(cfg).unwrap();
         let pose = Isometry3::from_parts(Translation3::new(sensor[0], sensor[1], sensor[2]), rot);
         let p = to_sensor(&pose, &world);
         let report = map.integrate(&pose, &[LabeledPoint::new(p, Labels::top1(2))]).unwrap();

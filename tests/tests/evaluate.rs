@@ -6,7 +6,7 @@ use sndt_core::{Config, Pinhole};
 use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
 use sndt_host::dataset::{Dataset, Frame, LabelSource, Rays};
 use sndt_host::eval::evaluate::{evaluate, load_snapshot, save_snapshot, EvalOptions};
-use sndt_host::semantic_map::{backproject, integrate_frame, HostMap};
+use sndt_host::mapping::{backproject, integrate_frame, HostMap};
 use std::sync::Arc;
 
 const CAM: Pinhole = Pinhole {
@@ -138,8 +138,7 @@ fn predicted_labels_make_worse_maps_than_ground_truth() {
 #[test]
 fn per_pixel_rays_backproject_like_the_pinhole() {
     let data = split(4);
-    let mut map: Box<HostMap> =
-        sndt_host::semantic_map::boxed_map(Config::with_cell_size(0.1)).unwrap();
+    let mut map: Box<HostMap> = sndt_host::mapping::boxed_map(Config::with_cell_size(0.1)).unwrap();
     let ids: Vec<_> = data.trajectories()[0].1.clone();
     for id in &ids {
         integrate_frame(map.as_mut(), &data.load(id).unwrap(), LabelSource::Gt, 1).unwrap();
@@ -172,7 +171,7 @@ fn per_pixel_rays_backproject_like_the_pinhole() {
 fn snapshots_round_trip_through_files() {
     let data = split(3);
     let mut map: Box<HostMap> =
-        sndt_host::semantic_map::boxed_map(Config::with_cell_size(0.15)).unwrap();
+        sndt_host::mapping::boxed_map(Config::with_cell_size(0.15)).unwrap();
     for id in &data.trajectories()[1].1 {
         integrate_frame(map.as_mut(), &data.load(id).unwrap(), LabelSource::Gt, 2).unwrap();
     }
@@ -202,8 +201,8 @@ fn snapshots_round_trip_through_files() {
 fn every_mapper_runs_through_one_loop() {
     use sndt_host::baselines::bki::{BkiConfig, BkiMap, Readout};
     use sndt_host::eval::evaluate::{map_and_score, Frames, MapScore};
+    use sndt_host::mapping::SemanticMap;
     use sndt_host::reference::RefMap;
-    use sndt_host::semantic_map::SemanticMap;
     use std::borrow::Cow;
     let data = split(3);
     let frames: Vec<Frame> = data.trajectories()[0]
@@ -237,7 +236,7 @@ fn every_mapper_runs_through_one_loop() {
         score
     }
     let config = Config::with_cell_size(0.1);
-    let mut core: Box<HostMap> = sndt_host::semantic_map::boxed_map(config).unwrap();
+    let mut core: Box<HostMap> = sndt_host::mapping::boxed_map(config).unwrap();
     let mut reference = RefMap::new(config, 40);
     let mut bki = BkiMap::new(BkiConfig::new(0.1, 0.3)).unwrap();
     let scores = [
@@ -272,7 +271,7 @@ fn every_mapper_runs_through_one_loop() {
 #[test]
 fn frames_read_again_for_the_render_pass_score_as_kept_ones() {
     use sndt_host::eval::evaluate::{map_and_score, Frames};
-    use sndt_host::semantic_map::boxed_map;
+    use sndt_host::mapping::boxed_map;
     use std::borrow::Cow;
     let data = split(4);
     let ids = data.trajectories()[0].1.clone();

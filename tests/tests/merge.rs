@@ -14,7 +14,7 @@ type Device = Map<64, 16, 4>;
 type Global = Map<8192, 2048, 4>;
 
 fn global(config: Config) -> Box<Global> {
-    sndt_host::semantic_map::boxed_map(config).unwrap()
+    sndt_host::mapping::boxed_map(config).unwrap()
 }
 
 /// A sensor walking along x and back, 1 m from a cluster of points: the device map fills,

@@ -114,8 +114,8 @@ proptest! {
 
     #[test]
     fn frame_is_independent_of_point_order(cfg in config(), a in frame(), b in frame()) {
-        let mut m1 = sndt_host::semantic_map::boxed_map::<4096, 4096, CLASSES>(cfg).unwrap();
-        let mut m2 = sndt_host::semantic_map::boxed_map::<4096, 4096, CLASSES>(cfg).unwrap();
+        let mut m1 = sndt_host::mapping::boxed_map::<4096, 4096, CLASSES>(cfg).unwrap();
+        let mut m2 = sndt_host::mapping::boxed_map::<4096, 4096, CLASSES>(cfg).unwrap();
 
         let r1 = run(&mut m1, &a, false);
         let r2 = run(&mut m2, &a, true);
@@ -151,8 +151,7 @@ fn room_frame_is_independent_of_point_order() {
         .collect();
     let mut snaps = Vec::new();
     for pts in [&points, &reversed, &interleaved] {
-        let mut map =
-            sndt_host::semantic_map::boxed_map::<8192, 8192, 40>(Config::DEFAULT).unwrap();
+        let mut map = sndt_host::mapping::boxed_map::<8192, 8192, 40>(Config::DEFAULT).unwrap();
         let r = map.integrate(&pose, pts).unwrap();
         assert_eq!(
             (r.voxels_evicted, r.blocks_evicted, r.dropped_points),
@@ -176,8 +175,8 @@ fn sampled_votes_are_independent_of_point_order() {
         votes_per_frame: 8,
         ..Config::DEFAULT
     };
-    let mut forward = sndt_host::semantic_map::boxed_map::<16384, 8192, 40>(config).unwrap();
-    let mut reversed = sndt_host::semantic_map::boxed_map::<16384, 8192, 40>(config).unwrap();
+    let mut forward = sndt_host::mapping::boxed_map::<16384, 8192, 40>(config).unwrap();
+    let mut reversed = sndt_host::mapping::boxed_map::<16384, 8192, 40>(config).unwrap();
     for pose in &poses[..3] {
         let points = room_frame(pose, &cam);
         let back: Vec<_> = points.iter().rev().copied().collect();

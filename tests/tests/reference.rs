@@ -69,7 +69,7 @@ fn one_voxel_mean_and_covariance_are_the_textbook_values() {
     // The core quantises offsets to h / 64 (round half up): 0.02 m = 12.8 quanta -> +-13,
     // 0.01 m = 6.4 quanta -> +-6. By hand: mean at the centre, Sigma = (2 * 13^2, 2 * 6^2
     // ...) / 3 quanta^2.
-    let mut core: Box<SmallMap> = sndt_host::semantic_map::boxed_map(Config::DEFAULT).unwrap();
+    let mut core: Box<SmallMap> = sndt_host::mapping::boxed_map(Config::DEFAULT).unwrap();
     core.integrate(&Isometry3::identity(), &pts(&p, 1)).unwrap();
     let c = core.gaussian(&VoxelKey { x: 0, y: 0, z: 10 }).unwrap();
     assert_eq!(c.count, 4);
@@ -112,7 +112,7 @@ fn point_cap_halves_the_count_and_keeps_the_mean() {
 /// point at `p2` whose ray passes through A.
 fn two_frames(config: Config, first: &[[f32; 3]], p2: [f32; 3]) -> (RefMap, Box<SmallMap>) {
     let mut r = RefMap::new(config, 40);
-    let mut core: Box<SmallMap> = sndt_host::semantic_map::boxed_map(config).unwrap();
+    let mut core: Box<SmallMap> = sndt_host::mapping::boxed_map(config).unwrap();
     for frame in [pts(first, 1), pts(&[p2], 2)] {
         r.integrate(&Isometry3::identity(), &frame).unwrap();
         core.integrate(&Isometry3::identity(), &frame).unwrap();
@@ -239,7 +239,7 @@ fn histogram_halving_by_hand() {
         ..Config::DEFAULT
     };
     let mut r = RefMap::new(config, 40);
-    let mut core: Box<SmallMap> = sndt_host::semantic_map::boxed_map(config).unwrap();
+    let mut core: Box<SmallMap> = sndt_host::mapping::boxed_map(config).unwrap();
     let mut from = 0;
     for (n, class) in frames {
         let frame = pts(&lattice(from, n), class);

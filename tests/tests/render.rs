@@ -7,7 +7,7 @@ use sndt_core::{Config, Map, Pinhole, Point3, Vector3, INVALID_LABEL};
 use sndt_host::dataset::source::Every;
 use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
 use sndt_host::dataset::{Dataset, Frame, LabelSource, Rays};
-use sndt_host::semantic_map::{backproject, boxed_map, integrate_frame, HostMap};
+use sndt_host::mapping::{backproject, boxed_map, integrate_frame, HostMap};
 
 /// The demo's first trajectory (living room, every 5th frame of a 100-frame walk, full
 /// 1024x768 frames) mapped with ground-truth labels at `cell`; returns the map and the

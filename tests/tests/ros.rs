@@ -8,10 +8,10 @@ use sndt_host::dataset::ros::bag::{Bag, BagOptions};
 use sndt_host::dataset::ros::msgs::{self, Header, TfMessage, TransformStamped};
 use sndt_host::dataset::synthetic::{write_split, SynthOptions, Synthetic};
 use sndt_host::dataset::{open, Dataset, OpenOptions};
+use sndt_host::mapping::{boxed_map, integrate_frame, HostMap};
 use sndt_host::output::ros::write::{
     camera_info, camera_transform, frame_time, image, names, write_trajectory, BagWriter,
 };
-use sndt_host::semantic_map::{boxed_map, integrate_frame, HostMap};
 use std::path::PathBuf;
 
 fn temp(name: &str) -> PathBuf {

@@ -17,7 +17,7 @@ fn wall_depth_image_front_free_behind_unknown() {
     let cam = camera(64, 48);
     let depth = vec![2.03f32; 64 * 48];
     let labels = vec![5u8; 64 * 48];
-    let mut map = sndt_host::semantic_map::boxed_map::<4096, 2048, 40>(Config::DEFAULT).unwrap();
+    let mut map = sndt_host::mapping::boxed_map::<4096, 2048, 40>(Config::DEFAULT).unwrap();
     let r = map
         .integrate_depth(&Isometry3::identity(), &depth_image(cam, &depth, &labels))
         .unwrap();
@@ -84,7 +84,7 @@ fn room_wall_front_free_behind_unknown() {
     let cam = camera(128, 96);
     let pose = look_at([4.5, 2.0, 1.5], [4.5, 5.0, 1.5]);
     let (depth, labels) = scene.render(&pose, &cam);
-    let mut map = sndt_host::semantic_map::boxed_map::<16384, 8192, 40>(cfg).unwrap();
+    let mut map = sndt_host::mapping::boxed_map::<16384, 8192, 40>(cfg).unwrap();
     let r = map
         .integrate_depth(&pose, &depth_image(cam, &depth, &labels))
         .unwrap();
@@ -197,7 +197,7 @@ fn surface_keys() -> BTreeSet<VoxelKey> {
 
 /// Runs the surface frames, returns the map and the surface log-odds before grazing.
 fn build_surface(model: MissModel) -> Box<SurfaceMap> {
-    let mut map = sndt_host::semantic_map::boxed_map::<4096, 2048, 4>(config_with(model)).unwrap();
+    let mut map = sndt_host::mapping::boxed_map::<4096, 2048, 4>(config_with(model)).unwrap();
     for (pose, pts) in surface_frames() {
         let r = map.integrate(&pose, &pts).unwrap();
         assert_eq!(r.points_used as usize, pts.len());
@@ -289,7 +289,7 @@ fn range_and_planar_depth_images() {
     let depth = vec![2.0f32; 48 * 36];
     let labels = vec![1u8; 48 * 36];
     for kind in [sndt_core::DepthKind::Range, sndt_core::DepthKind::Planar] {
-        let mut map = sndt_host::semantic_map::boxed_map::<4096, 1024, 4>(Config::DEFAULT).unwrap();
+        let mut map = sndt_host::mapping::boxed_map::<4096, 1024, 4>(Config::DEFAULT).unwrap();
         let img = sndt_core::DepthImage {
             kind,
             ..depth_image(cam, &depth, &labels)
@@ -324,7 +324,7 @@ fn range_and_planar_depth_images() {
 fn points_beyond_max_range_only_clear_free_space() {
     let mut cfg = Config::DEFAULT;
     cfg.max_range = 2.0;
-    let mut map = sndt_host::semantic_map::boxed_map::<64, 256, 4>(cfg).unwrap();
+    let mut map = sndt_host::mapping::boxed_map::<64, 256, 4>(cfg).unwrap();
     let pose = Isometry3::from_parts(Translation3::new(0.05, 0.05, 0.05), Default::default());
     let pts = [
         LabeledPoint::new(Point3::new(0.0, 0.0, 5.0), Labels::top1(1)),

@@ -41,7 +41,7 @@ fn with_capacities(snap: &[u8], voxels: u32, blocks: u32) -> Vec<u8> {
 /// A small map with a bit of everything: two room frames (surface voxels, free space,
 /// several classes), classes folded into 1..=8.
 fn build(frames: &[usize], model: MissModel) -> Box<Small> {
-    let mut map = sndt_host::semantic_map::boxed_map::<512, 128, C>(config_with(model)).unwrap();
+    let mut map = sndt_host::mapping::boxed_map::<512, 128, C>(config_with(model)).unwrap();
     let cam = camera(16, 12);
     let poses = sndt_host::dataset::synthetic::room::orbit(8);
     for &i in frames {
@@ -69,7 +69,7 @@ fn fixtures() -> &'static (Vec<u8>, Vec<u8>) {
 
 /// A map holding the second fixture.
 fn target() -> Box<Small> {
-    let mut t = sndt_host::semantic_map::boxed_map::<512, 128, C>(Config::DEFAULT).unwrap();
+    let mut t = sndt_host::mapping::boxed_map::<512, 128, C>(Config::DEFAULT).unwrap();
     t.read_snapshot(&fixtures().1).unwrap();
     t
 }
@@ -96,7 +96,7 @@ fn round_trip_is_byte_identical() {
             + 4
     );
     let mut copy =
-        sndt_host::semantic_map::boxed_map::<512, 128, C>(Config::with_cell_size(0.3)).unwrap();
+        sndt_host::mapping::boxed_map::<512, 128, C>(Config::with_cell_size(0.3)).unwrap();
     copy.read_snapshot(&snap).unwrap();
     assert_eq!(snapshot(&*copy), snap);
     assert_eq!(copy.checksum(), map.checksum());
@@ -133,7 +133,7 @@ fn round_trip_is_byte_identical() {
     assert_eq!(snapshot(&*original), snapshot(&*copy));
 
     // Into a map with more capacity: same content (only the capacity fields differ).
-    let mut big = sndt_host::semantic_map::boxed_map::<1024, 512, C>(Config::DEFAULT).unwrap();
+    let mut big = sndt_host::mapping::boxed_map::<1024, 512, C>(Config::DEFAULT).unwrap();
     big.read_snapshot(&snap).unwrap();
     assert_eq!(snapshot(&*big), with_capacities(&snap, 1024, 512));
 }
@@ -373,7 +373,7 @@ fn decayed_wall_snapshot_reads_back() {
     let cam = camera(64, 48);
     let depth = vec![2.03f32; 64 * 48];
     let labels = vec![1u8; 64 * 48];
-    let mut map = sndt_host::semantic_map::boxed_map::<4096, 1024, C>(cfg).unwrap();
+    let mut map = sndt_host::mapping::boxed_map::<4096, 1024, C>(cfg).unwrap();
     for i in 0..12 {
         // Small sideways steps so the points differ from frame to frame.
         let pose = Isometry3::translation(0.0037 * i as f32, -0.0023 * i as f32, 0.0);
@@ -385,7 +385,7 @@ fn decayed_wall_snapshot_reads_back() {
         "no voxel decayed"
     );
     let snap = snapshot(&*map);
-    let mut copy = sndt_host::semantic_map::boxed_map::<4096, 1024, C>(Config::DEFAULT).unwrap();
+    let mut copy = sndt_host::mapping::boxed_map::<4096, 1024, C>(Config::DEFAULT).unwrap();
     assert_eq!(copy.read_snapshot(&snap), Ok(()));
     assert_eq!(snapshot(&*copy), snap);
 }

@@ -7,8 +7,8 @@ use sndt_host::cli::merge::{run as merge, MergeArgs};
 use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
 use sndt_host::dataset::{Dataset, LabelSource};
 use sndt_host::eval::evaluate::{evaluate, EvalOptions};
-use sndt_host::global_map::{DeviceCapacity, GlobalMap, Spill, Tier1};
-use sndt_host::semantic_map::{boxed_map, integrate_frame, HostMap};
+use sndt_host::mapping::{boxed_map, integrate_frame, HostMap};
+use sndt_host::mapping::{DeviceCapacity, GlobalMap, Spill, Tier1};
 
 const CAM: Pinhole = Pinhole {
     fx: 138.6,
@@ -148,7 +148,7 @@ fn robots(data: &Synthetic, config: Config) -> Robots {
             joint.merge_record(r).unwrap();
             true
         };
-        sndt_host::semantic_map::integrate_frame_spilling(
+        sndt_host::mapping::integrate_frame_spilling(
             &mut *device,
             &frame,
             LabelSource::Gt,

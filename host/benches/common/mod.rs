@@ -2,7 +2,7 @@
 
 use sndt_core::{Depth, DepthImage, LabelImage};
 use sndt_host::dataset::frame::{Frame, Rays};
-use sndt_host::semantic_map::HostMap;
+use sndt_host::mapping::HostMap;
 use std::time::Instant;
 
 /// The frame as the core's depth image: every pixel, ground-truth labels.
@@ -44,7 +44,7 @@ pub fn integrate_all(map: &mut HostMap, frames: &[Frame]) -> Vec<f64> {
 /// A fresh map for `config`, warmed by one pass over `frames` (its memory touched) and
 /// reset, then timed over them: the map and the sorted ms per frame.
 pub fn warm_timed_pass(config: sndt_core::Config, frames: &[Frame]) -> (Box<HostMap>, Vec<f64>) {
-    let mut map: Box<HostMap> = sndt_host::semantic_map::boxed_map(config).expect("valid config");
+    let mut map: Box<HostMap> = sndt_host::mapping::boxed_map(config).expect("valid config");
     integrate_all(&mut map, frames);
     map.reset(config).expect("valid config");
     let mut ms = integrate_all(&mut map, frames);

@@ -31,7 +31,7 @@
 
 pub use crate::baselines::label_grid::LabelGrid;
 use crate::dataset::frame::{Frame, LabelSource};
-use crate::semantic_map::{LabelView, SemanticMap};
+use crate::mapping::{LabelView, SemanticMap};
 use anyhow::{bail, Result};
 use nalgebra::{Point3, Vector3};
 use rustc_hash::FxHashMap;

@@ -12,12 +12,12 @@ use crate::dataset::open::open_spec;
 use crate::dataset::ros::msgs::Time;
 use crate::dataset::source::usable_frames;
 use crate::eval::evaluate::load_snapshot;
+use crate::mapping::{integrate_frame, HostMap};
 use crate::output::export::{ellipsoids, write_ellipsoids, write_points};
 use crate::output::octomap::{write_octomap, OctoFormat, OctoMap};
 use crate::output::progress::progress;
 use crate::output::ros::export::MapBag;
 use crate::output::ros::write::frame_time;
-use crate::semantic_map::{integrate_frame, HostMap};
 use anyhow::Result;
 use sndt_core::Config;
 use std::path::{Path, PathBuf};
@@ -169,7 +169,7 @@ fn map_first_trajectory(a: &ExportArgs, mut bag: Option<&mut MapBag>) -> Result<
         .first()
         .ok_or_else(|| anyhow::anyhow!("{spec}: no frames"))?;
     let mut map: Box<HostMap> =
-        crate::semantic_map::boxed_map(config).map_err(|e| anyhow::anyhow!("config: {e}"))?;
+        crate::mapping::boxed_map(config).map_err(|e| anyhow::anyhow!("config: {e}"))?;
     let bar = progress(ids.len() as u64, "map");
     let (mut skipped, mut mapped, mut unwritten) = (Vec::new(), 0, None);
     for frame in usable_frames(dataset.as_ref(), ids, cell, &mut skipped) {

@@ -7,7 +7,7 @@ use crate::cli::parse::check_config;
 use crate::dataset::frame::LabelSource;
 use crate::dataset::open::open_spec;
 use crate::eval::evaluate::{evaluate, EvalOptions, Evaluation, SpillSummary};
-use crate::global_map::{DeviceCapacity, Spill};
+use crate::mapping::{DeviceCapacity, Spill};
 use crate::output::progress::progress;
 use anyhow::{Context, Result};
 use sndt_core::{Config, ConfigField};

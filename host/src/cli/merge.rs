@@ -1,6 +1,6 @@
 //! `sndt merge`: merges saved maps and record streams into one map.
 
-use crate::global_map::{check_stream, GlobalMap};
+use crate::mapping::{check_stream, GlobalMap};
 use anyhow::{bail, Context, Result};
 use std::path::PathBuf;
 

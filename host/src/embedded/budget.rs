@@ -151,7 +151,7 @@ fn simulate_with<const V: usize, const B: usize>(
     stride: u32,
 ) -> Result<TrajectoryBudget> {
     let mut map: Box<Map<V, B, 40>> =
-        crate::semantic_map::boxed_map(config).map_err(|e| anyhow::anyhow!("config: {e}"))?;
+        crate::mapping::boxed_map(config).map_err(|e| anyhow::anyhow!("config: {e}"))?;
     let mut out = TrajectoryBudget::default();
     let mut buf = [0u8; STREAM_FRAME_BYTES];
     let (mut writer, _) =

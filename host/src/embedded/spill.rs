@@ -22,8 +22,8 @@
 //! (scripts/firmware.sh, scripts/aarch64.sh).
 
 use crate::embedded::testvector::{TestVector, VectorMap, CLASSES};
-use crate::global_map::{check_stream, merge_checked, StreamError, StreamSummary};
-use crate::semantic_map::boxed_map;
+use crate::mapping::boxed_map;
+use crate::mapping::{check_stream, merge_checked, StreamError, StreamSummary};
 use anyhow::{anyhow, Result};
 use sndt_core::{
     Config, Crc32, Depth, DepthImage, DepthKind, FrameReport, LabelImage, Map, Record,

@@ -521,7 +521,7 @@ pub struct VectorRun {
 /// returns the map's snapshot CRC with the counts.
 pub fn run(v: &TestVector) -> Result<VectorRun> {
     let mut map: Box<VectorMap> =
-        crate::semantic_map::boxed_map(v.config).map_err(|e| anyhow::anyhow!("config: {e}"))?;
+        crate::mapping::boxed_map(v.config).map_err(|e| anyhow::anyhow!("config: {e}"))?;
     let mut reports = Vec::with_capacity(v.frames.len());
     for (k, f) in v.frames.iter().enumerate() {
         let image = DepthImage {

@@ -24,9 +24,9 @@
 use crate::dataset::frame::{Frame, LabelSource, Rays};
 
 use crate::eval::metrics::{Confusion, Metrics, MAX_GT_DEPTH};
+use crate::mapping::{boxed_map, HostMap, SemanticMap};
 use crate::reference::key::Key;
 use crate::reference::map::RefMap;
-use crate::semantic_map::{boxed_map, HostMap, SemanticMap};
 use anyhow::{anyhow, Result};
 use rayon::prelude::*;
 use sndt_core::{Config, MapStats, MissModel, Occupancy, VoxelKey, INVALID_LABEL};

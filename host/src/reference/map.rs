@@ -1,9 +1,9 @@
 //! The reference map: [`RefMap`] and its voxels, integrated in the core's steps.
 
 use crate::dataset::frame::{Frame, LabelSource};
+use crate::mapping::{LabelView, SemanticMap};
 use crate::reference::key::{Key, KeyMap, KeySet};
 use crate::reference::render::{RefHit, RenderIndex, Renderable};
-use crate::semantic_map::{LabelView, SemanticMap};
 use anyhow::anyhow;
 use nalgebra::{Matrix3, Vector3};
 use sndt_core::{

@@ -2,8 +2,8 @@
 //! Gaussians, cast and rendered in `f64` as the core casts its rays.
 
 use crate::dataset::frame::{Frame, Rays};
+use crate::mapping::LabelView;
 use crate::reference::key::{Key, KeyMap};
-use crate::semantic_map::LabelView;
 use anyhow::anyhow;
 use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;

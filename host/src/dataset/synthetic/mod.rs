@@ -1,9 +1,12 @@
 //! Synthetic labelled indoor scenes ("mini-Hypersim"), deterministic from a seed, so that
 //! every tool runs without a download.
 //!
-//! - [`scenes`]: procedural rooms of six kinds built from labelled primitives;
-//! - [`floor`]: a building floor of eleven such rooms along a corridor, and walks through
-//!   all of them;
+//! - [`scenes`]: procedural rooms of six kinds built from labelled primitives (the
+//!   scene type here, the generator's parts in a file each: placement rules, the room
+//!   shell, furniture, the kinds of room);
+//! - [`floor`]: a building floor of eleven such rooms along a corridor (its layout), and
+//!   walks through all of them (timing in `floor/walk.rs`, paths planned on a clearance
+//!   grid in `floor/planner.rs`);
 //! - [`geometry`]: the primitives, a BVH and exact ray casting;
 //! - [`render`]: 1024x768 Euclidean range, planar depth, NYU40 labels and instances with
 //!   exact pinhole intrinsics;
@@ -13,6 +16,9 @@
 //! - [`Synthetic`]: the split (separate rooms, or a walk of the floor) as a [`Dataset`]
 //!   rendered on demand, and [`write_split`] writing it in the prepared layout that
 //!   [`crate::dataset::prepared`] reads.
+//!
+//! The renderer sits in the host's reader layer (see the crate doc): it makes the same
+//! [`Frame`]s a reader returns, and uses nothing above that layer.
 
 pub mod floor;
 pub mod geometry;

@@ -32,7 +32,7 @@ pub type HostMap = Map<{ 1 << 19 }, { 1 << 17 }, 40>;
 ///
 /// ```
 /// use sndt_host::dataset::{open_spec, Dataset, LabelSource};
-/// use sndt_host::semantic_map::{boxed_map, HostMap, SemanticMap};
+/// use sndt_host::mapping::{boxed_map, HostMap, SemanticMap};
 /// let data = open_spec("synthetic:1:2", &Default::default()).unwrap();
 /// let frame = data.load(&data.frames()[0]).unwrap();
 /// let mut map: Box<HostMap> = boxed_map(sndt_core::Config::with_cell_size(0.2)).unwrap();
@@ -111,7 +111,7 @@ impl<const V: usize, const B: usize, const C: usize> LabelView for Map<V, B, C> 
 /// constructed by value). No `unsafe` involved.
 ///
 /// ```
-/// let map = sndt_host::semantic_map::boxed_map::<1024, 256, 40>(sndt_core::Config::DEFAULT).unwrap();
+/// let map = sndt_host::mapping::boxed_map::<1024, 256, 40>(sndt_core::Config::DEFAULT).unwrap();
 /// assert!(map.is_empty());
 /// ```
 pub fn boxed_map<const V: usize, const B: usize, const C: usize>(
