@@ -173,6 +173,7 @@ pub(crate) fn cell_of_packed(key: u64) -> u32 {
 
 /// The key of voxel coordinates known to be in the key range, without the check of
 /// [`VoxelKey::from_ints`] (a free-space walk's ends are valid keys).
+#[inline]
 pub(crate) fn key_of(k: [i32; 3]) -> VoxelKey {
     VoxelKey {
         x: k[0] as i16,
