@@ -1,4 +1,5 @@
-//! Integer voxel keys, their packing into table keys, and the hash that orders them.
+//! Integer voxel keys, their packing into table keys (and the block and cell of a packed
+//! key, read without unpacking), and the hash that orders them.
 
 /// Integer index of a voxel: the voxel covers `[k h, (k + 1) h)` on each axis.
 ///
@@ -149,6 +150,38 @@ pub(crate) fn join_key(k: [u16; 3]) -> u64 {
     ((k[0] as u64) << 32) | ((k[1] as u64) << 16) | k[2] as u64
 }
 
+/// The 2-bit field of the x coordinate in a block's cell index ([`VoxelKey::cell`]).
+pub(crate) const X_FIELD: u32 = 0b00_00_11;
+/// The 2-bit field of the y coordinate in a block's cell index.
+pub(crate) const Y_FIELD: u32 = 0b00_11_00;
+/// The 2-bit field of the z coordinate in a block's cell index.
+pub(crate) const Z_FIELD: u32 = 0b11_00_00;
+
+/// The packed block key of the voxel with packed key `key`: each 16-bit field `x + 2^15`
+/// becomes `(x >> 2) + 2^15`, which is `((x + 2^15) >> 2) + 3 * 2^13`.
+#[inline(always)]
+pub(crate) fn block_of_packed(key: u64) -> u64 {
+    ((key >> 2) & 0x3fff_3fff_3fff) + 0x6000_6000_6000
+}
+
+/// [`VoxelKey::cell`] of the voxel with packed key `key` (the offset 2^15 of a field
+/// leaves its low bits alone).
+#[inline(always)]
+pub(crate) fn cell_of_packed(key: u64) -> u32 {
+    (((key >> 32) & 0x3) | ((key >> 14) & 0xc) | ((key << 4) & 0x30)) as u32
+}
+
+/// The key of voxel coordinates known to be in the key range, without the check of
+/// [`VoxelKey::from_ints`] (a free-space walk's ends are valid keys).
+#[inline]
+pub(crate) fn key_of(k: [i32; 3]) -> VoxelKey {
+    VoxelKey {
+        x: k[0] as i16,
+        y: k[1] as i16,
+        z: k[2] as i16,
+    }
+}
+
 #[inline]
 fn pack(x: i32, y: i32, z: i32) -> u64 {
     let b = |v: i32| ((v + 32768) as u64) & 0xffff;
@@ -261,5 +294,25 @@ mod tests {
         }
         assert_eq!(key(-32767, 0, 5).chebyshev(&key(32767, 1, -5)), 65534);
         assert_eq!(key(1, 2, 3).chebyshev(&key(1, 2, 3)), 0);
+    }
+
+    /// The packed block key and cell of a packed voxel key are those of the voxel key.
+    #[test]
+    fn block_and_cell_of_packed_keys() {
+        let mut rng = Lcg(7);
+        let edges = [-32767i16, -32766, -5, -4, -3, -1, 0, 1, 3, 4, 32766, 32767];
+        let edge_keys = edges.into_iter().flat_map(|x| {
+            edges
+                .into_iter()
+                .flat_map(move |y| edges.into_iter().map(move |z| key(x, y, z)))
+        });
+        let random = (0..10_000).map(|_| {
+            let mut c = || ((rng.next() * 65534.0) as i32 - 32767) as i16;
+            key(c(), c(), c())
+        });
+        for k in edge_keys.chain(random) {
+            assert_eq!(block_of_packed(k.packed()), k.block(), "{k:?}");
+            assert_eq!(cell_of_packed(k.packed()), k.cell(), "{k:?}");
+        }
     }
 }

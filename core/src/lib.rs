@@ -38,9 +38,9 @@
 //! | module | what it holds |
 //! |---|---|
 //! | `error`, `labels` | [`Error`] and the [`ConfigField`] it names; a point's top-k [`Labels`] and [`LabeledPoint`] |
-//! | `key` | [`VoxelKey`], packed table keys and the hash that orders them |
+//! | `key` | [`VoxelKey`], packed table keys, the block and cell of a packed key, and the hash that orders them |
 //! | `config`, `crc` | [`Config`]; CRC-32 |
-//! | `geometry::{sqrt, dda, gaussian, camera}` | the square root; 3-D DDA voxel walk; [`Gaussian`], its prepared inverse with the eigenvalue floor; [`Pinhole`], depth images, [`depth_point`], pose checks |
+//! | `geometry::{sqrt, dda, gaussian, camera}` | the square root; the 3-D DDA voxel walk and [`voxels_on_segment`]; [`Gaussian`], its prepared inverse with the eigenvalue floor; [`Pinhole`], depth images, [`depth_point`], pose checks |
 //! | `storage::table` | the fixed-capacity hash table with stable slots |
 //! | `storage::{block, voxel, votes}` | occupancy blocks; surface voxels: sums, decay, histogram; vote sampling of the histogram |
 //! | `storage::record` | one block or voxel as its snapshot record ([`Record`]), the [`RecordSink`] eviction hands them to |
@@ -122,9 +122,9 @@ pub use error::{ConfigField, Error};
 pub use geometry::camera::{
     depth_point, pose_from_matrix, validate_pose, Depth, DepthImage, DepthKind, LabelImage, Pinhole,
 };
+pub use geometry::dda::voxels_on_segment;
 pub use geometry::gaussian::Gaussian;
 pub use integrate::frame::{FrameReport, Phase, MAX_FRAME_POINTS};
-pub use integrate::free_space::voxels_on_segment;
 pub use key::{VoxelKey, KEY_LIMIT};
 pub use labels::{LabeledPoint, Labels, MAX_TOP_K};
 pub use nalgebra::{Isometry3, Matrix3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};

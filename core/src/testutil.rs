@@ -9,6 +9,7 @@ use crate::crc::crc32;
 use crate::storage::map::Map;
 use crate::storage::voxel::Voxel;
 use crate::*;
+use std::boxed::Box;
 use std::vec::Vec;
 
 pub(crate) fn lp(x: f32, y: f32, z: f32, class: u8) -> LabeledPoint {
@@ -135,4 +136,141 @@ pub(crate) fn assert_gaussian_exact(g: &Gaussian, mean: [f64; 3], cov: [[f64; 3]
             );
         }
     }
+}
+
+/// A furnished room 6 m x 5 m x 2.8 m as axis-aligned boxes `(min, max, class)`: floor,
+/// ceiling, four walls, then the furniture.
+const ROOM: [([f32; 3], [f32; 3], u8); 14] = [
+    ([-0.1, -0.1, -0.1], [6.1, 5.1, 0.0], 2),
+    ([-0.1, -0.1, 2.8], [6.1, 5.1, 2.9], 22),
+    ([-0.1, -0.1, 0.0], [0.0, 5.1, 2.8], 1),
+    ([6.0, -0.1, 0.0], [6.1, 5.1, 2.8], 1),
+    ([0.0, -0.1, 0.0], [6.0, 0.0, 2.8], 1),
+    ([0.0, 5.0, 0.0], [6.0, 5.1, 2.8], 1),
+    ([0.3, 0.3, 0.0], [2.3, 1.9, 0.55], 4),
+    ([3.5, 2.0, 0.72], [4.7, 2.8, 0.76], 7),
+    ([3.55, 2.05, 0.0], [3.6, 2.1, 0.72], 7),
+    ([4.6, 2.7, 0.0], [4.65, 2.75, 0.72], 7),
+    ([5.6, 1.0, 0.0], [6.0, 2.2, 1.8], 15),
+    ([5.5, 1.1, 1.0], [5.6, 1.6, 1.25], 23),
+    ([2.0, 4.98, 1.2], [3.2, 5.0, 1.9], 11),
+    ([0.5, 4.4, 0.0], [0.8, 4.7, 1.5], 35),
+];
+
+/// Where the ray from `o` along `d` first meets a box of [`ROOM`]: the ray parameter and
+/// the box's class.
+fn cast_room(o: &Vector3<f32>, d: &Vector3<f32>) -> Option<(f32, u8)> {
+    let mut best: Option<(f32, u8)> = None;
+    for (lo, hi, label) in ROOM {
+        let (mut t0, mut t1) = (0.0f32, f32::INFINITY);
+        let mut hit = true;
+        for a in 0..3 {
+            if d[a].abs() < 1e-12 {
+                if o[a] < lo[a] || o[a] > hi[a] {
+                    hit = false;
+                    break;
+                }
+                continue;
+            }
+            let (mut ta, mut tb) = ((lo[a] - o[a]) / d[a], (hi[a] - o[a]) / d[a]);
+            if ta > tb {
+                core::mem::swap(&mut ta, &mut tb);
+            }
+            t0 = t0.max(ta);
+            t1 = t1.min(tb);
+            if t0 > t1 {
+                hit = false;
+                break;
+            }
+        }
+        if hit && best.is_none_or(|(t, _)| t0 < t) {
+            best = Some((t0, label));
+        }
+    }
+    best
+}
+
+/// The camera pose at `eye` looking at `target`, image rows pointing down (towards -z).
+pub(crate) fn look_at(eye: [f32; 3], target: [f32; 3]) -> Isometry3<f32> {
+    let e = Vector3::from(eye);
+    let f = (Vector3::from(target) - e).normalize();
+    let right = f.cross(&Vector3::z()).normalize();
+    let down = f.cross(&right);
+    let m = Matrix3::from_columns(&[right, down, f]);
+    Isometry3::from_parts(Translation3::from(e), UnitQuaternion::from_matrix(&m))
+}
+
+/// `n` camera poses on a loop inside [`ROOM`], each looking across the room.
+pub(crate) fn orbit(n: usize) -> Vec<Isometry3<f32>> {
+    (0..n)
+        .map(|i| {
+            let a = i as f32 / n as f32 * core::f32::consts::TAU;
+            let eye = [3.0 + 1.2 * libm::cosf(a), 2.5 + libm::sinf(a), 1.5];
+            let target = [
+                3.0 - 2.5 * libm::cosf(a + 0.6),
+                2.5 - 2.0 * libm::sinf(a + 0.6),
+                0.9,
+            ];
+            look_at(eye, target)
+        })
+        .collect()
+}
+
+/// Hypersim's field of view at 1/8 of its resolution.
+pub(crate) const CAM: Pinhole = Pinhole {
+    fx: 886.81 / 8.0,
+    fy: 886.81 / 8.0,
+    cx: 64.0,
+    cy: 48.0,
+    width: 128,
+    height: 96,
+};
+
+/// The exact planar depth (metres, 0 where no box is hit) and label image of [`ROOM`]
+/// seen by `cam` from `pose`.
+pub(crate) fn room_frame(pose: &Isometry3<f32>, cam: &Pinhole) -> (Vec<f32>, Vec<u8>) {
+    let n = (cam.width * cam.height) as usize;
+    let (mut depth, mut labels) = (std::vec![0f32; n], std::vec![0u8; n]);
+    for i in 0..n {
+        let r = cam.ray(i as u32 % cam.width, i as u32 / cam.width);
+        let d_cam = Vector3::new(r[0], r[1], r[2]);
+        let norm = d_cam.norm();
+        let d = pose.rotation * (d_cam / norm);
+        if let Some((t, l)) = cast_room(&pose.translation.vector, &d) {
+            depth[i] = t / norm;
+            labels[i] = l;
+        }
+    }
+    (depth, labels)
+}
+
+/// A map with room for all of [`ROOM`] at the cell sizes the tests use.
+pub(crate) type RoomMap = Map<{ 1 << 16 }, { 1 << 15 }, 40>;
+
+/// Runs `f` on a thread with room for building big maps in debug builds.
+pub(crate) fn big_stack(f: impl FnOnce() + Send + 'static) {
+    std::thread::Builder::new()
+        .stack_size(256 << 20)
+        .spawn(f)
+        .unwrap()
+        .join()
+        .unwrap_or_else(|e| std::panic::resume_unwind(e));
+}
+
+/// [`ROOM`] integrated from the first `frames` poses of [`orbit`] at cell size `cell`.
+pub(crate) fn room_map(cell: f32, frames: usize) -> Box<RoomMap> {
+    let mut map = Box::new(RoomMap::new(Config::with_cell_size(cell)));
+    for pose in orbit(frames) {
+        let (depth, labels) = room_frame(&pose, &CAM);
+        let img = DepthImage {
+            camera: CAM,
+            depth: Depth::Metres(&depth),
+            kind: DepthKind::Planar,
+            labels: LabelImage::Top1(&labels),
+            stride: 1,
+        };
+        let r = map.integrate_depth(&pose, &img).unwrap();
+        assert_eq!(r.dropped_points + r.voxels_evicted, 0, "test map too small");
+    }
+    map
 }

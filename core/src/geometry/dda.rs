@@ -1,5 +1,9 @@
 //! Exact voxel traversal (Amanatides & Woo, 1987) in voxel units, shared by free space
-//! (`integrate/free_space.rs`) and ray casting (`readout/raycast.rs`).
+//! (`integrate/free_space.rs`) and ray casting (`readout/raycast.rs`): the walk state
+//! [`Dda`], [`lane_keys`] for eight walks at once, the voxel-by-voxel [`traverse`] of a
+//! segment, and the public [`voxels_on_segment`] in metres.
+
+use crate::key::VoxelKey;
 
 /// Walk state: the current voxel and, per axis, the ray parameter of the next boundary.
 pub(crate) struct Dda {
@@ -151,27 +155,95 @@ pub(crate) fn lane_keys(
     steps
 }
 
+/// Exact voxel traversal (Amanatides & Woo) of the segment from `o` to `target` (voxel
+/// units) starting in voxel `start` and ending in `end`, visiting `end` only if
+/// `include_end`. Axis ties step the lowest axis first; at most the Manhattan distance
+/// between the keys plus one voxels are visited. The walk stops early when `visit`
+/// returns `false`.
+pub(crate) fn traverse(
+    o: [f32; 3],
+    target: [f32; 3],
+    start: [i32; 3],
+    end: [i32; 3],
+    include_end: bool,
+    mut visit: impl FnMut([i32; 3]) -> bool,
+) {
+    let d = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
+    let mut dda = Dda::new(o, d, start);
+    let steps: u32 = (0..3).map(|a| (end[a] - start[a]).unsigned_abs()).sum();
+    for _ in 0..=steps {
+        if dda.k == end {
+            if include_end {
+                visit(end);
+            }
+            return;
+        }
+        if !visit(dda.k) {
+            return;
+        }
+        let (a, t) = dda.next_axis();
+        if t > 1.0 + 1e-4 {
+            return;
+        }
+        dda.advance(a);
+    }
+}
+
+/// Visits every voxel the segment from `from` to `to` (metres) passes through, in order,
+/// both end voxels included: the same traversal the map uses for free space. Returns
+/// `false` (visiting nothing) when an end is outside the key range.
+///
+/// ```
+/// use sndt_core::{voxels_on_segment, VoxelKey};
+/// let mut seen = Vec::new();
+/// assert!(voxels_on_segment(&[0.05, 0.05, 0.05], &[0.35, 0.15, 0.05], 0.1, |k| seen.push(k)));
+/// assert_eq!(seen.first(), Some(&VoxelKey { x: 0, y: 0, z: 0 }));
+/// assert_eq!(seen.last(), Some(&VoxelKey { x: 3, y: 1, z: 0 }));
+/// assert_eq!(seen.len(), 5);
+/// ```
+pub fn voxels_on_segment(
+    from: &[f32; 3],
+    to: &[f32; 3],
+    cell_size: f32,
+    mut visit: impl FnMut(VoxelKey),
+) -> bool {
+    let (Some(a), Some(b)) = (
+        VoxelKey::from_point(from, cell_size),
+        VoxelKey::from_point(to, cell_size),
+    ) else {
+        return false;
+    };
+    let o = [
+        from[0] / cell_size,
+        from[1] / cell_size,
+        from[2] / cell_size,
+    ];
+    let t = [to[0] / cell_size, to[1] / cell_size, to[2] / cell_size];
+    let ka = [a.x as i32, a.y as i32, a.z as i32];
+    let kb = [b.x as i32, b.y as i32, b.z as i32];
+    traverse(o, t, ka, kb, true, |k| {
+        if let Some(key) = VoxelKey::from_ints(k[0], k[1], k[2]) {
+            visit(key);
+        }
+        true
+    });
+    true
+}
+
 #[cfg(test)]
 mod tests {
     extern crate std;
 
     use super::*;
+    use crate::key::key_of;
     use crate::testutil::Lcg;
-    use crate::VoxelKey;
     use std::vec::Vec;
 
     /// The voxels of a walk from `o` along `d` in voxel `k`, step by step with
     /// [`Dda::next_axis`]: at most `limit` steps, none whose boundary lies beyond `t_end`.
     fn scalar(o: [f32; 3], d: [f32; 3], k: [i32; 3], limit: u32, t_end: f32) -> Vec<u64> {
         let mut dda = Dda::new(o, d, k);
-        let packed = |k: [i32; 3]| {
-            VoxelKey {
-                x: k[0] as i16,
-                y: k[1] as i16,
-                z: k[2] as i16,
-            }
-            .packed()
-        };
+        let packed = |k: [i32; 3]| key_of(k).packed();
         let mut keys = std::vec![packed(dda.k)];
         for _ in 0..limit {
             let (a, t) = dda.next_axis();

@@ -9,11 +9,13 @@
 //! grazing rays do not erase thin surfaces.
 
 use crate::config::{to_fixed, Config, MissModel};
-use crate::geometry::dda::{lane_keys, Dda, LANES, LANE_STEPS};
+use crate::geometry::dda::{lane_keys, traverse, Dda, LANES, LANE_STEPS};
 use crate::geometry::gaussian::{PrepCache, Prepared};
 use crate::geometry::sqrt::sqrt;
 use crate::integrate::frame::FrameState;
-use crate::key::{VoxelKey, KEY_LIMIT};
+use crate::key::{
+    block_of_packed, cell_of_packed, key_of, VoxelKey, KEY_LIMIT, X_FIELD, Y_FIELD, Z_FIELD,
+};
 use crate::storage::block::bits;
 use crate::storage::map::Map;
 use crate::storage::table::Entry;
@@ -105,6 +107,8 @@ impl Segment {
 /// below the margin. A test walks random segments of that length and checks that the
 /// stop never fires early. The stop remains for [`voxels_on_segment`]'s segments, which
 /// may be longer.
+///
+/// [`voxels_on_segment`]: crate::voxels_on_segment
 const T_END: f32 = 1.0 + 1e-3;
 
 /// Whether rays are walked [`LANES`] at a time: on 64-bit targets, whose out-of-order
@@ -497,81 +501,6 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 }
 
-/// Exact voxel traversal (Amanatides & Woo) of the segment from `o` to `target` (voxel
-/// units) starting in voxel `start` and ending in `end`, visiting `end` only if
-/// `include_end`. Axis ties step the lowest axis first; at most the Manhattan distance
-/// between the keys plus one voxels are visited. The walk stops early when `visit`
-/// returns `false`.
-fn traverse(
-    o: [f32; 3],
-    target: [f32; 3],
-    start: [i32; 3],
-    end: [i32; 3],
-    include_end: bool,
-    mut visit: impl FnMut([i32; 3]) -> bool,
-) {
-    let d = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
-    let mut dda = Dda::new(o, d, start);
-    let steps: u32 = (0..3).map(|a| (end[a] - start[a]).unsigned_abs()).sum();
-    for _ in 0..=steps {
-        if dda.k == end {
-            if include_end {
-                visit(end);
-            }
-            return;
-        }
-        if !visit(dda.k) {
-            return;
-        }
-        let (a, t) = dda.next_axis();
-        if t > 1.0 + 1e-4 {
-            return;
-        }
-        dda.advance(a);
-    }
-}
-
-/// Visits every voxel the segment from `from` to `to` (metres) passes through, in order,
-/// both end voxels included: the same traversal the map uses for free space. Returns
-/// `false` (visiting nothing) when an end is outside the key range.
-///
-/// ```
-/// use sndt_core::{voxels_on_segment, VoxelKey};
-/// let mut seen = Vec::new();
-/// assert!(voxels_on_segment(&[0.05, 0.05, 0.05], &[0.35, 0.15, 0.05], 0.1, |k| seen.push(k)));
-/// assert_eq!(seen.first(), Some(&VoxelKey { x: 0, y: 0, z: 0 }));
-/// assert_eq!(seen.last(), Some(&VoxelKey { x: 3, y: 1, z: 0 }));
-/// assert_eq!(seen.len(), 5);
-/// ```
-pub fn voxels_on_segment(
-    from: &[f32; 3],
-    to: &[f32; 3],
-    cell_size: f32,
-    mut visit: impl FnMut(VoxelKey),
-) -> bool {
-    let (Some(a), Some(b)) = (
-        VoxelKey::from_point(from, cell_size),
-        VoxelKey::from_point(to, cell_size),
-    ) else {
-        return false;
-    };
-    let o = [
-        from[0] / cell_size,
-        from[1] / cell_size,
-        from[2] / cell_size,
-    ];
-    let t = [to[0] / cell_size, to[1] / cell_size, to[2] / cell_size];
-    let ka = [a.x as i32, a.y as i32, a.z as i32];
-    let kb = [b.x as i32, b.y as i32, b.z as i32];
-    traverse(o, t, ka, kb, true, |k| {
-        if let Some(key) = VoxelKey::from_ints(k[0], k[1], k[2]) {
-            visit(key);
-        }
-        true
-    });
-    true
-}
-
 /// NDT-OM miss log-odds for a ray through a voxel's Gaussian, or `None` when the point of
 /// the ray closest to the Gaussian lies beyond the ray's end.
 fn ndt_om_miss(cfg: &Config, ray: &Ray, g: &Prepared) -> Option<f32> {
@@ -623,34 +552,6 @@ fn mask_word(mask: u64, cell: u32) -> usize {
 #[inline(always)]
 fn has_bit(word: usize, cell: u32) -> bool {
     (word >> (cell as usize & (usize::BITS as usize - 1))) & 1 != 0
-}
-
-/// The 2-bit fields of the x, y and z coordinates in a block's cell index.
-const X_FIELD: u32 = 0b00_00_11;
-const Y_FIELD: u32 = 0b00_11_00;
-const Z_FIELD: u32 = 0b11_00_00;
-
-/// The packed block key of the voxel with packed key `key`: each 16-bit field `x + 2^15`
-/// becomes `(x >> 2) + 2^15`, which is `((x + 2^15) >> 2) + 3 * 2^13`.
-#[inline(always)]
-fn block_of_packed(key: u64) -> u64 {
-    ((key >> 2) & 0x3fff_3fff_3fff) + 0x6000_6000_6000
-}
-
-/// [`VoxelKey::cell`] of the voxel with packed key `key` (the offset 2^15 of a field
-/// leaves its low bits alone).
-#[inline(always)]
-fn cell_of_packed(key: u64) -> u32 {
-    (((key >> 32) & 0x3) | ((key >> 14) & 0xc) | ((key << 4) & 0x30)) as u32
-}
-
-/// The key of in-range voxel coordinates (the walk's ends are valid keys).
-fn key_of(k: [i32; 3]) -> VoxelKey {
-    VoxelKey {
-        x: k[0] as i16,
-        y: k[1] as i16,
-        z: k[2] as i16,
-    }
 }
 
 /// Centre of a voxel in voxel units.
@@ -939,13 +840,11 @@ mod tests {
         }
         // A debug build moves the ~0.9 MB map through its stack more than once (about
         // 2 MB in all, the default test thread's whole stack): run on a thread with room.
-        let body = || {
+        big_stack(|| {
             for seed in [1, 2, 3] {
                 check_seed(seed);
             }
-        };
-        let with_room = std::thread::Builder::new().stack_size(16 << 20);
-        with_room.spawn(body).unwrap().join().unwrap();
+        });
     }
 
     /// The `T_END` stop never fires before the last step of a free-space segment, which
@@ -985,26 +884,6 @@ mod tests {
         }
         // The walks came within a hair of the end, where rounding could matter.
         assert!(highest > 0.999_99, "{highest}");
-    }
-
-    /// The packed block key and cell of a packed voxel key are those of the voxel key.
-    #[test]
-    fn block_and_cell_of_packed_keys() {
-        let mut rng = Lcg(7);
-        let edges = [-32767i16, -32766, -5, -4, -3, -1, 0, 1, 3, 4, 32766, 32767];
-        let edge_keys = edges.into_iter().flat_map(|x| {
-            edges
-                .into_iter()
-                .flat_map(move |y| edges.into_iter().map(move |z| key(x, y, z)))
-        });
-        let random = (0..10_000).map(|_| {
-            let mut c = || ((rng.next() * 65534.0) as i32 - 32767) as i16;
-            key(c(), c(), c())
-        });
-        for k in edge_keys.chain(random) {
-            assert_eq!(block_of_packed(k.packed()), k.block(), "{k:?}");
-            assert_eq!(cell_of_packed(k.packed()), k.cell(), "{k:?}");
-        }
     }
 
     /// Regression: `lambda = 0.5` is valid. A truncated ray (p_z = 0) through a Gaussian's mean gives

@@ -303,7 +303,7 @@ mod tests {
 
     use super::*;
     use crate::geometry::gaussian::PrepCache;
-    use crate::readout::raycast::tests::*;
+    use crate::readout::raycast::tests::reference_raycast;
     use crate::testutil::*;
     use crate::*;
     use std::vec::Vec;
