@@ -53,7 +53,7 @@
 //! | `readout::{raycast, splat, render}` | [`Map::raycast`] and the ray-ellipsoid test; an ellipsoid's pixel footprint; [`Map::render`] (each visible Gaussian drawn over its footprint) |
 //!
 //! Integer formats, the snapshot layout and eviction are described in more depth in
-//! `docs/ARCHITECTURE.md`.
+//! `docs/FORMATS.md`.
 //!
 //! ## Features
 //!

@@ -1,6 +1,6 @@
 //! The f64 reference S-NDT (`sndt_host::reference`) against hand calculations, and the
 //! core against the reference within `sndt_host::eval::compare::TOLERANCES` on a fixed
-//! synthetic trajectory at 10 cm (`docs/ARCHITECTURE.md`, the f64 reference and
+//! synthetic trajectory at 10 cm (`docs/EVALUATION.md`, the f64 reference and
 //! tolerances).
 
 use sndt_core::{

@@ -1,5 +1,5 @@
 //! The baselines S-NDT is compared with: S-BKI (Gan et al., RA-L 2020) and the paper's
-//! optimised OS-BKI (the paper's section III-B); `docs/ARCHITECTURE.md` (evaluation
+//! optimised OS-BKI (the paper's section III-B); `docs/EVALUATION.md` (evaluation
 //! protocol, baselines) sums them up.
 //!
 //! Both run Bayesian kernel inference on a voxel grid: every training point (a labelled

@@ -5,7 +5,7 @@
 //! occupancy states, class argmax) and both are back-projected into every frame and
 //! scored with the paper's metrics ([`crate::eval::metrics`]). The tolerances at 10 cm,
 //! [`TOLERANCES`], are checked by the `reference` test on a fixed synthetic trajectory;
-//! `docs/ARCHITECTURE.md` (the f64 reference and tolerances) explains each.
+//! `docs/EVALUATION.md` (the f64 reference and tolerances) explains each.
 //!
 //! ```
 //! use sndt_core::{Config, Pinhole};

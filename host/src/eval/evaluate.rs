@@ -1,4 +1,4 @@
-//! The paper's evaluation protocol (`docs/ARCHITECTURE.md`, evaluation protocol): one map
+//! The paper's evaluation protocol (`docs/EVALUATION.md`): one map
 //! per trajectory, built from every frame in order (single-threaded, timed), then
 //! back-projected into every frame of that trajectory at its ground-truth pose; one
 //! confusion matrix over all frames of the split.

@@ -26,7 +26,7 @@ pub struct LabelStats {
     /// Ground-truth pixels per class (index 0 = void).
     pub class_pixels: [u64; 41],
     /// Raw top-1 prediction against the ground truth, counted by [`Confusion::add_frame`]
-    /// as in the evaluation (`docs/ARCHITECTURE.md`, section 8).
+    /// as in the evaluation (`docs/EVALUATION.md`).
     pub prediction: Confusion,
 }
 

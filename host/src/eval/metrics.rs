@@ -1,6 +1,6 @@
 //! The paper's evaluation protocol, as the authors' evaluate.py computes it: one 42x42
 //! confusion matrix over all frames, void ignored, invalid predictions counted against
-//! recall, mIoU / mPAcc / invR (`docs/ARCHITECTURE.md`, evaluation protocol).
+//! recall, mIoU / mPAcc / invR (`docs/EVALUATION.md`).
 
 /// Side of the confusion matrix: rows and columns 0 void, 1..=40 classes, 41 invalid.
 pub const CONFUSION_SIDE: usize = 42;

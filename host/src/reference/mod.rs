@@ -39,7 +39,7 @@
 //! the hit is the smallest entry distance into an ellipsoid of Mahalanobis radius
 //! `render_radius`.
 //!
-//! `docs/ARCHITECTURE.md` (the f64 reference and tolerances) says what it shares with the
+//! `docs/EVALUATION.md` (the f64 reference and tolerances) says what it shares with the
 //! core and how the two are compared ([`crate::eval::compare`]).
 //!
 //! ```

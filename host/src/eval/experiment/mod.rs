@@ -1,7 +1,7 @@
 //! The paper's experiments in one call: S-NDT, S-BKI and OS-BKI on every trajectory of a
 //! dataset, per label source, cell size and kernel length, each evaluated by the same loop
 //! ([`map_and_score`](crate::eval::evaluate::map_and_score), the paper's evaluation
-//! protocol in `docs/ARCHITECTURE.md`), written as the paper's Table I (mIoU / invR /
+//! protocol in `docs/EVALUATION.md`), written as the paper's Table I (mIoU / invR /
 //! mPAcc) and Table II (map update rate) in Markdown and CSV, with a per-class IoU chart
 //! like the paper's Fig. 5 and an update-rate-vs-mIoU plot.
 //!

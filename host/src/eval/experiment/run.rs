@@ -1,6 +1,6 @@
 //! Running a [`Plan`]: every job on every trajectory, each map built with the plan's
 //! configuration and scored by the evaluation loop ([`map_and_score`], the paper's
-//! evaluation protocol in `docs/ARCHITECTURE.md`), with its update time.
+//! evaluation protocol in `docs/EVALUATION.md`), with its update time.
 //!
 //! Each trajectory's frames are loaded once and every job is run on them; trajectories
 //! run in parallel (rayon), and so do a trajectory's jobs, but each map is built by one
