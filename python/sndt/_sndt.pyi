@@ -87,6 +87,12 @@ class FrameReport:
     """Surface voxels evicted to make room."""
     blocks_evicted: int
     """Occupancy blocks evicted to make room."""
+    records_spilled: int
+    """Records of evicted voxels and blocks a spill sink took: always 0, as a ``Map`` has
+    no sink (its evictions are counted in ``voxels_evicted`` and ``blocks_evicted``)."""
+    records_dropped: int
+    """Records of evicted voxels and blocks a spill sink refused: always 0, as a ``Map``
+    has no sink."""
 
 class Voxels:
     """The surface voxels of a map as arrays, one row per voxel (``Map.voxels()``)."""
@@ -265,10 +271,15 @@ class Metrics:
     """mIoU, invR and mPAcc as fractions, with the IoU of each class present."""
 
     miou: float
+    """Mean IoU over the classes present in the ground truth."""
     invr: float
+    """Invalid predictions (nothing rendered) over all non-void ground-truth pixels."""
     mpacc: float
+    """Mean pixel accuracy over the classes present in the ground truth."""
     per_class_iou: Dict[str, float]
+    """IoU per class name, for the classes present in the ground truth."""
     frames: int
+    """Frames scored."""
 
 def open_dataset(
     path: _Path,

@@ -106,28 +106,50 @@ fn set(c: &mut Config, name: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
 
 /// The config as a dict of its fields (`lambda` as `lambda_`, the miss model by name).
 pub fn to_dict<'py>(py: Python<'py>, c: &Config) -> PyResult<Bound<'py, PyDict>> {
+    // Field by field (no `..`): a field the core adds fails to compile here until the dict,
+    // and so `FIELDS` and `set` (python/tests/test_mirrors.py), hold it.
+    let Config {
+        cell_size,
+        quant_bits,
+        n_min,
+        eigen_ratio,
+        n_max,
+        hit,
+        miss,
+        clamp_min,
+        clamp_max,
+        lambda,
+        noise_base,
+        noise_quadratic,
+        max_range,
+        top_k,
+        min_score,
+        votes_per_frame,
+        miss_model,
+        render_radius,
+    } = *c;
     let d = PyDict::new(py);
-    d.set_item("cell_size", c.cell_size)?;
-    d.set_item("quant_bits", c.quant_bits)?;
-    d.set_item("n_min", c.n_min)?;
-    d.set_item("eigen_ratio", c.eigen_ratio)?;
-    d.set_item("n_max", c.n_max)?;
-    d.set_item("hit", c.hit)?;
-    d.set_item("miss", c.miss)?;
-    d.set_item("clamp_min", c.clamp_min)?;
-    d.set_item("clamp_max", c.clamp_max)?;
-    d.set_item("lambda_", c.lambda)?;
-    d.set_item("noise_base", c.noise_base)?;
-    d.set_item("noise_quadratic", c.noise_quadratic)?;
-    d.set_item("max_range", c.max_range)?;
-    d.set_item("top_k", c.top_k)?;
-    d.set_item("min_score", c.min_score)?;
-    d.set_item("votes_per_frame", c.votes_per_frame)?;
-    let model = match c.miss_model {
+    d.set_item("cell_size", cell_size)?;
+    d.set_item("quant_bits", quant_bits)?;
+    d.set_item("n_min", n_min)?;
+    d.set_item("eigen_ratio", eigen_ratio)?;
+    d.set_item("n_max", n_max)?;
+    d.set_item("hit", hit)?;
+    d.set_item("miss", miss)?;
+    d.set_item("clamp_min", clamp_min)?;
+    d.set_item("clamp_max", clamp_max)?;
+    d.set_item("lambda_", lambda)?;
+    d.set_item("noise_base", noise_base)?;
+    d.set_item("noise_quadratic", noise_quadratic)?;
+    d.set_item("max_range", max_range)?;
+    d.set_item("top_k", top_k)?;
+    d.set_item("min_score", min_score)?;
+    d.set_item("votes_per_frame", votes_per_frame)?;
+    let model = match miss_model {
         MissModel::NdtOm => "ndt_om",
         MissModel::Constant => "constant",
     };
     d.set_item("miss_model", model)?;
-    d.set_item("render_radius", c.render_radius)?;
+    d.set_item("render_radius", render_radius)?;
     Ok(d)
 }

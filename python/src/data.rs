@@ -1,18 +1,14 @@
 //! Datasets from Python: `sndt.open_dataset` reads whatever the command line reads and
-//! yields trajectories of frames as numpy values; `sndt.evaluate` scores maps on them with
-//! the command line's evaluation.
+//! yields trajectories of frames as numpy values.
 
-use crate::errors::{dataset_error, DatasetError};
-use crate::map::PyMap;
+use crate::errors::dataset_error;
 use numpy::{PyArray1, PyArrayMethods};
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList, PyTuple};
+use pyo3::types::{PyList, PyTuple};
 use sndt_core::DepthKind;
 use sndt_host::dataset::source::BadFrame;
 use sndt_host::dataset::{Dataset, Frame, FrameId, Rays};
-use sndt_host::eval::evaluate::gt_depth;
-use sndt_host::eval::metrics::Confusion;
 use std::sync::Arc;
 
 /// A dataset opened by ``sndt.open_dataset``: iterate it for its trajectories.
@@ -52,35 +48,6 @@ pub struct PyFrameIter {
 pub struct PyFrame {
     pub frame: Arc<Frame>,
     stamp: Option<u64>,
-}
-
-/// mIoU, invR and mPAcc of ``sndt.evaluate``, as fractions (the paper prints them x 100),
-/// with the IoU of each class present in the ground truth, by NYU40 name.
-#[pyclass(module = "sndt", name = "Metrics", frozen, get_all)]
-pub struct PyMetrics {
-    /// Mean IoU over the classes present in the ground truth.
-    miou: f64,
-    /// Invalid predictions (nothing rendered) over all non-void ground-truth pixels.
-    invr: f64,
-    /// Mean pixel accuracy over the classes present in the ground truth.
-    mpacc: f64,
-    /// IoU per class name.
-    per_class_iou: Py<PyDict>,
-    /// Frames scored.
-    frames: usize,
-}
-
-#[pymethods]
-impl PyMetrics {
-    fn __repr__(&self) -> String {
-        format!(
-            "Metrics(mIoU {:.2} %, invR {:.2} %, mPAcc {:.2} %, {} frames)",
-            100.0 * self.miou,
-            100.0 * self.invr,
-            100.0 * self.mpacc,
-            self.frames
-        )
-    }
 }
 
 /// Opens ``path``: a prepared-layout or raw Hypersim directory, a ROS 2 bag (``.mcap``
@@ -326,79 +293,4 @@ impl PyFrame {
         let (h, w) = self.shape();
         format!("sndt.Frame({}, {w}x{h})", self.frame.id)
     }
-}
-
-/// Scores maps as ``sndt map`` does: each map is rendered into each of its frames at the
-/// frame's pose, and the renders are scored against the frames' ground truth (pixels 20 m
-/// or farther are not counted), all frames in one confusion matrix.
-///
-/// ``evaluate(map, frames)`` for one map, or ``evaluate([(map, frames), ...])`` for one
-/// map per trajectory, as ``sndt map`` maps a dataset. ``frames`` is a ``Trajectory`` or
-/// any iterable of ``Frame``.
-#[pyfunction]
-#[pyo3(signature = (maps, frames=None))]
-pub fn evaluate(
-    py: Python<'_>,
-    maps: &Bound<'_, PyAny>,
-    frames: Option<&Bound<'_, PyAny>>,
-) -> PyResult<PyMetrics> {
-    let pairs: Vec<(Bound<'_, PyMap>, Bound<'_, PyAny>)> = match frames {
-        Some(frames) => {
-            let map = maps.cast::<PyMap>().map_err(|_| {
-                PyTypeError::new_err("evaluate(map, frames): map must be an sndt.Map")
-            })?;
-            vec![(map.clone(), frames.clone())]
-        }
-        None => maps
-            .try_iter()
-            .map_err(|_| {
-                PyTypeError::new_err("evaluate takes (map, frames) or a list of (map, frames)")
-            })?
-            .map(|pair| {
-                let pair = pair?;
-                let (map, frames): (Bound<'_, PyAny>, Bound<'_, PyAny>) =
-                    pair.extract().map_err(|_| {
-                        PyTypeError::new_err("evaluate([...]): each item must be (map, frames)")
-                    })?;
-                let map = map.cast_into::<PyMap>().map_err(|_| {
-                    PyTypeError::new_err("evaluate([...]): each map must be an sndt.Map")
-                })?;
-                Ok((map, frames))
-            })
-            .collect::<PyResult<_>>()?,
-    };
-    let mut total = Confusion::default();
-    let mut count = 0;
-    for (map, frames) in pairs {
-        for frame in frames.try_iter()? {
-            let frame = frame?;
-            let frame = frame.cast::<PyFrame>().map_err(|_| {
-                PyTypeError::new_err("evaluate: frames must yield sndt.Frame objects")
-            })?;
-            let frame = frame.get().frame.clone();
-            let Some(gt) = frame.labels.as_ref() else {
-                continue;
-            };
-            let rendered = map
-                .get()
-                .with(py, |m| {
-                    crate::each_map!(m, m => sndt_host::mapping::backproject(m.as_ref(), &frame))
-                })
-                .map_err(|e| DatasetError::new_err(format!("{e:#}")))?;
-            total.add_frame(gt, &rendered, &gt_depth(&frame));
-            count += 1;
-        }
-    }
-    let m = total.metrics();
-    let per_class = PyDict::new(py);
-    for (name, v) in m.iou_by_name() {
-        per_class.set_item(name, v.as_f64())?;
-    }
-    Ok(PyMetrics {
-        miou: m.miou,
-        invr: m.invr,
-        mpacc: m.mpacc,
-        per_class_iou: per_class.unbind(),
-        frames: count,
-    })
 }

@@ -2,20 +2,25 @@
 //! numpy arrays, and the host's datasets and evaluation. `python/sndt/__init__.py`
 //! re-exports it; `docs/PYTHON.md` describes the API.
 //!
+//! The modules, in dependency order: each uses only modules above it (no two import each
+//! other, which `tests/tests/layout.rs` checks).
+//!
 //! | module | what it holds |
 //! |---|---|
 //! | `errors` | `sndt.Error` and a subclass per kind of core error |
 //! | `args` | checks of numpy arguments, the pose and the intrinsics |
 //! | `config` | the core's `Config` as keyword arguments and as a dict |
 //! | `capacity` | the capacities offered at run time (`AnyMap`) |
-//! | `map` | `sndt.Map`, `FrameReport`, `Voxels` |
-//! | `data` | `open_dataset`, `Dataset`, `Trajectory`, `Frame`, `evaluate`, `Metrics` |
+//! | `data` | `open_dataset`, `Dataset`, `Trajectory`, `Frame` |
+//! | `map` | `sndt.Map` (which integrates a `Frame`), `FrameReport`, `Voxels` |
+//! | `evaluate` | `evaluate` (a `Map` rendered into `Frame`s), `Metrics` |
 
 mod args;
 mod capacity;
 mod config;
 mod data;
 mod errors;
+mod evaluate;
 mod map;
 
 use pyo3::prelude::*;
@@ -29,9 +34,9 @@ fn _sndt(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<data::PyDataset>()?;
     m.add_class::<data::PyTrajectory>()?;
     m.add_class::<data::PyFrame>()?;
-    m.add_class::<data::PyMetrics>()?;
+    m.add_class::<evaluate::PyMetrics>()?;
     m.add_function(wrap_pyfunction!(data::open_dataset, m)?)?;
-    m.add_function(wrap_pyfunction!(data::evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(evaluate::evaluate, m)?)?;
     errors::register(m)?;
     m.add("UNKNOWN", map::UNKNOWN)?;
     m.add("FREE", map::FREE)?;

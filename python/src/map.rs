@@ -11,7 +11,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyByteArray, PyBytes, PyDict, PyTuple};
 use rayon::prelude::*;
 use sndt_core::{
-    Depth, DepthImage, DepthKind, FrameReport, LabelImage, Labels, Occupancy, Pinhole,
+    Depth, DepthImage, DepthKind, FrameReport, LabelImage, Labels, MapStats, Occupancy, Pinhole,
     INVALID_LABEL,
 };
 use sndt_host::dataset::LabelSource;
@@ -66,6 +66,13 @@ pub struct PyFrameReport {
     pub voxels_evicted: u32,
     /// Occupancy blocks evicted to make room.
     pub blocks_evicted: u32,
+    /// Records of evicted voxels and blocks a spill sink took: always 0 here, as a
+    /// ``Map`` has no sink (its evictions are counted in ``voxels_evicted`` and
+    /// ``blocks_evicted``).
+    pub records_spilled: u32,
+    /// Records of evicted voxels and blocks a spill sink refused: always 0 here, as a
+    /// ``Map`` has no sink.
+    pub records_dropped: u32,
 }
 
 #[pymethods]
@@ -89,21 +96,42 @@ impl PyFrameReport {
 }
 
 impl From<FrameReport> for PyFrameReport {
-    fn from(r: FrameReport) -> Self {
+    fn from(report: FrameReport) -> Self {
+        // Taken apart field by field (no `..`): a field the core adds fails to compile here
+        // until `FrameReport` shows it (python/tests/test_mirrors.py checks the names).
+        let FrameReport {
+            points_used,
+            truncated,
+            rejected_depth,
+            rejected_label,
+            rejected_out_of_range,
+            dropped_points,
+            dropped_misses,
+            end_voxels,
+            rays,
+            voxels_created,
+            blocks_created,
+            voxels_evicted,
+            blocks_evicted,
+            records_spilled,
+            records_dropped,
+        } = report;
         PyFrameReport {
-            points_used: r.points_used,
-            truncated: r.truncated,
-            rejected_depth: r.rejected_depth,
-            rejected_label: r.rejected_label,
-            rejected_out_of_range: r.rejected_out_of_range,
-            dropped_points: r.dropped_points,
-            dropped_misses: r.dropped_misses,
-            end_voxels: r.end_voxels,
-            rays: r.rays,
-            voxels_created: r.voxels_created,
-            blocks_created: r.blocks_created,
-            voxels_evicted: r.voxels_evicted,
-            blocks_evicted: r.blocks_evicted,
+            points_used,
+            truncated,
+            rejected_depth,
+            rejected_label,
+            rejected_out_of_range,
+            dropped_points,
+            dropped_misses,
+            end_voxels,
+            rays,
+            voxels_created,
+            blocks_created,
+            voxels_evicted,
+            blocks_evicted,
+            records_spilled,
+            records_dropped,
         }
     }
 }
@@ -633,16 +661,25 @@ impl PyMap {
     /// Totals since the map was made: frames, evicted voxels and blocks, dropped updates.
     #[getter]
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let s = {
+        let stats = {
             let map = self.lock();
             each_map!(&*map, m => m.stats())
         };
+        // Field by field (no `..`): a field the core adds fails to compile here until the
+        // dict holds it.
+        let MapStats {
+            frames,
+            voxels_evicted,
+            blocks_evicted,
+            dropped_points,
+            dropped_misses,
+        } = stats;
         let d = PyDict::new(py);
-        d.set_item("frames", s.frames)?;
-        d.set_item("voxels_evicted", s.voxels_evicted)?;
-        d.set_item("blocks_evicted", s.blocks_evicted)?;
-        d.set_item("dropped_points", s.dropped_points)?;
-        d.set_item("dropped_misses", s.dropped_misses)?;
+        d.set_item("frames", frames)?;
+        d.set_item("voxels_evicted", voxels_evicted)?;
+        d.set_item("blocks_evicted", blocks_evicted)?;
+        d.set_item("dropped_points", dropped_points)?;
+        d.set_item("dropped_misses", dropped_misses)?;
         Ok(d)
     }
 

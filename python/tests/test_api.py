@@ -163,7 +163,8 @@ def test_every_public_name_has_a_docstring_and_a_stub():
         obj = getattr(sndt, name)
         if callable(obj):
             assert obj.__doc__ and len(obj.__doc__) > 20, name
-    for cls in (sndt.Map, sndt.Frame, sndt.Trajectory, sndt.Dataset, sndt.Voxels, sndt.FrameReport):
+    classes = (sndt.Map, sndt.Frame, sndt.Trajectory, sndt.Dataset, sndt.Voxels, sndt.FrameReport, sndt.Metrics)
+    for cls in classes:
         for attr, value in vars(cls).items():
             if not attr.startswith("_"):
                 assert value.__doc__, f"{cls.__name__}.{attr}"
