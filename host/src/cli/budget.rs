@@ -55,7 +55,7 @@ pub fn run(a: &BudgetArgs) -> Result<()> {
 }
 
 /// The memory report for `Map<capacity, blocks, classes>` (blocks default to
-/// `capacity / 8`, the firmware's ratio) and, given a dataset directory, the peak
+/// `capacity / 8`, the firmware's ratio) and, given a dataset, the peak
 /// occupancy and evictions of each of its trajectories at that capacity (rounded up to a
 /// compiled one, 40 classes, ground-truth labels).
 ///
