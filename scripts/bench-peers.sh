@@ -58,7 +58,7 @@ fi
 
 step "world points for OctoMap ($POINTS)"
 cargo run --release --quiet -p sndt-host --bin sndt -- \
-    points "$DATA" --out "$POINTS" --frames "$FRAMES"
+    points "$DATA" --points-file "$POINTS" --frames "$FRAMES"
 
 step "OctoMap harness ($HARNESS)"
 if [ ! -x "$HARNESS" ] || [ "$HARNESS_SRC" -nt "$HARNESS" ]; then

@@ -58,8 +58,8 @@ fn bad_option_values_are_refused_naming_the_option() {
             "> 0",
         ),
         (
-            &["experiment", "synthetic:1:2", "--cells", "0.1,-1"],
-            "--cells",
+            &["experiment", "synthetic:1:2", "--cell", "0.1,-1"],
+            "--cell",
             "> 0",
         ),
         (
@@ -418,37 +418,127 @@ fn export_takes_every_and_mcap_interval_as_map_does() {
     );
 }
 
-/// The warning `parse::renamed` prints for a deprecated spelling.
-fn deprecated(old: &str, new: &str) -> String {
-    format!("warning: {old} is deprecated and will be removed; use {new}")
+#[test]
+fn removed_and_renamed_options_are_refused() {
+    let cases: [&[&str]; 9] = [
+        &["budget", "--dataset", "synthetic:1:2", "--capacity", "4096"],
+        &["demo", "--frames", "1"],
+        &["experiment", "synthetic:1:2", "--cells", "0.1"],
+        &["synth", "--out", "x", "--frames", "2"],
+        &["experiment", "synthetic:1:2", "--labels", "both"],
+        &[
+            "cloud",
+            "synthetic:1:2",
+            "--frame",
+            "s/c/0000",
+            "--out",
+            "f.ply",
+        ],
+        &["points", "synthetic:1:2", "--out", "p.bin"],
+        &["merge", "a.sndt", "--out", "b.sndt"],
+        &["info", "robot.mcap", "--split", "test"],
+    ];
+    for args in cases {
+        let (code, out, err) = sndt_out(args);
+        assert_eq!(code, 2, "{args:?}: {out}{err}");
+        assert!(
+            err.contains("unexpected argument '--") || err.contains("invalid value 'both'"),
+            "{args:?}: {err}"
+        );
+    }
+}
+
+/// A ROS 2 bag of a small synthetic trajectory (64x48 frames, labels, no predictions):
+/// `frames` frames, posed in frame `world`.
+fn bag(name: &str, frames: usize) -> PathBuf {
+    use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
+    use sndt_host::dataset::Dataset;
+    use sndt_host::output::ros::write::{write_trajectory_compressed, ChunkCompression};
+    let file = temp_dir(name).join("robot.mcap");
+    let camera = sndt_core::Pinhole {
+        fx: 40.0,
+        fy: 40.0,
+        cx: 32.0,
+        cy: 24.0,
+        width: 64,
+        height: 48,
+    };
+    let split = Synthetic::new(SynthOptions {
+        scenes: 1,
+        frames,
+        camera,
+        predictions: false,
+        ..SynthOptions::default()
+    })
+    .unwrap();
+    let loaded = split.frames().iter().map(|id| split.load(id));
+    write_trajectory_compressed(&file, loaded, ChunkCompression::None).unwrap();
+    file
+}
+
+/// `budget`, `compare` and `cloud` take a bag's options as `map` does: a world frame the
+/// bag's transform tree lacks skips every frame with a warning naming the frame (`budget`
+/// then reports no trajectory, the others fail); the bag's own world frame works.
+#[test]
+fn budget_compare_and_cloud_take_the_bag_options() {
+    let file = bag("bag-options", 2);
+    let bag = file.to_str().unwrap();
+    let ply = file.with_file_name("frame.ply");
+    let commands: [Vec<&str>; 3] = [
+        vec!["budget", bag, "--capacity", "4096"],
+        vec!["compare", bag, "--cell", "0.2"],
+        vec![
+            "cloud",
+            bag,
+            "--frame",
+            "robot/cam_00/0001",
+            "--ply",
+            ply.to_str().unwrap(),
+        ],
+    ];
+    for command in commands {
+        let mut args = command.clone();
+        args.extend(["--world-frame", "nowhere", "--sync-tolerance", "0.01"]);
+        let (_, out, err) = sndt_out(&args);
+        assert!(
+            err.contains("frame nowhere is not in the transform tree"),
+            "{args:?}: {out}{err}"
+        );
+        let mut args = command.clone();
+        args.extend([
+            "--world-frame",
+            "world",
+            "--depth-topic",
+            "/camera/depth/image_rect_raw",
+        ]);
+        let (code, out, err) = sndt_out(&args);
+        assert_eq!(code, 0, "{args:?}: {out}{err}");
+        assert!(!err.contains("skipped"), "{args:?}: {err}");
+    }
+    assert!(ply.is_file());
 }
 
 #[test]
-fn synth_and_demo_take_the_deprecated_frames_with_a_warning() {
-    let dir = temp_dir("frames");
-    let data = dir.join("data");
-    let mut args = vec!["synth", "--scenes", "1", "--no-predictions"];
-    args.extend(["--out", data.to_str().unwrap(), "--frames", "2"]);
+fn merge_writes_the_sndt_file_it_is_given() {
+    let dir = temp_dir("merge-sndt");
+    let map = sndt_core::Map::<64, 16, 40>::new(sndt_core::Config::DEFAULT);
+    let mut bytes = vec![0; map.snapshot_len()];
+    map.write_snapshot(&mut bytes).unwrap();
+    let (a, merged) = (dir.join("a.sndt"), dir.join("merged.sndt"));
+    std::fs::write(&a, &bytes).unwrap();
+    let args = [
+        "merge",
+        a.to_str().unwrap(),
+        "--sndt",
+        merged.to_str().unwrap(),
+    ];
     let (code, out, err) = sndt_out(&args);
     assert_eq!(code, 0, "{out}{err}");
     assert!(
-        err.contains(&deprecated("--frames", "--frames-per-scene")),
-        "{err}"
+        out.contains(&format!("wrote {}", merged.display())),
+        "{out}"
     );
-    assert!(out.contains("2 frames in "), "{out}");
-    args.extend(["--frames-per-scene", "3"]);
-    let (code, _, err) = sndt_out(&args);
-    assert_eq!(code, 2, "both spellings at once: {err}");
-    let demo = dir.join("demo");
-    let mut args = vec!["demo", "--scenes", "1", "--cell", "0.2", "--frames", "1"];
-    args.extend(["--out", demo.to_str().unwrap()]);
-    let (code, out, err) = sndt_out(&args);
-    assert_eq!(code, 0, "{out}{err}");
-    assert!(
-        err.contains(&deprecated("--frames", "--frames-per-scene")),
-        "{err}"
-    );
-    assert!(out.contains(": 1 frames)"), "one frame of the walk: {out}");
+    assert!(merged.is_file());
 }
 
 #[test]
@@ -458,7 +548,7 @@ fn points_selects_frames_as_compare_does_and_budget_and_cloud_take_any_dataset()
     let mut args = vec![
         "points",
         root.to_str().unwrap(),
-        "--out",
+        "--points-file",
         file.to_str().unwrap(),
     ];
     args.extend(["--frames", "1..3"]);
@@ -473,16 +563,9 @@ fn points_selects_frames_as_compare_does_and_budget_and_cloud_take_any_dataset()
         "{err}"
     );
     let dir = root.to_str().unwrap();
-    let (code, new, err) = sndt_out(&["budget", dir, "--capacity", "4096"]);
-    assert_eq!(code, 0, "{new}{err}");
-    assert!(new.contains("| synth_00_living/cam_00 | 4 |"), "{new}");
-    let (code, old, err) = sndt_out(&["budget", "--dataset", dir, "--capacity", "4096"]);
-    assert_eq!(code, 0, "{old}{err}");
-    assert!(
-        err.contains(&deprecated("--dataset DIR", "the DATASET argument")),
-        "{err}"
-    );
-    assert_eq!(old, new);
+    let (code, out, err) = sndt_out(&["budget", dir, "--capacity", "4096"]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("| synth_00_living/cam_00 | 4 |"), "{out}");
     // A DATASET is `synthetic[:SCENES:FRAMES]` too, for budget and cloud as for map.
     let (code, out, err) = sndt_out(&["budget", "synthetic:1:2", "--capacity", "4096"]);
     assert_eq!(code, 0, "{out}{err}");
@@ -490,7 +573,7 @@ fn points_selects_frames_as_compare_does_and_budget_and_cloud_take_any_dataset()
     let ply = root.with_file_name("frame.ply");
     let frame = "synth_00_living/cam_00/0001";
     let mut args = vec!["cloud", "synthetic:1:2", "--frame", frame];
-    args.extend(["--out", ply.to_str().unwrap()]);
+    args.extend(["--ply", ply.to_str().unwrap()]);
     let (code, out, err) = sndt_out(&args);
     assert_eq!(code, 0, "{out}{err}");
     assert!(ply.is_file(), "{out}");
@@ -564,12 +647,12 @@ fn experiment(root: &Path, extra: &[&str]) -> (i32, String, String) {
 #[test]
 fn an_experiment_with_predicted_labels_needs_predictions() {
     let root = prepared("exp-nopred", 1, 1);
-    for labels in ["pred", "both"] {
+    for labels in ["pred", "gt,pred"] {
         let (code, out, err) = experiment(&root, &["--labels", labels]);
         assert_eq!(code, 1, "{out}{err}");
         let esanet = root.join("test").join("esanet");
         assert!(
-            err.contains(&format!("--labels {labels}: "))
+            err.contains("--labels pred: ")
                 && err.contains(&format!(
                     "has no predictions: no {} directory",
                     esanet.display()

@@ -1,6 +1,7 @@
 //! `sndt experiment`'s command line: `--cell` is the cell sizes' spelling (as in `map` and
-//! `compare`); the old `--cells` still works, hidden, with a deprecation warning, and
-//! cannot be given beside `--cell`; `--help` ends with an example.
+//! `compare`; `--cells` is refused), `--labels` is a comma-separated list of the label values
+//! `map` takes (of which the experiment runs `gt` and `pred`), and `--help` ends with an
+//! example.
 
 use std::process::{Command, Output};
 
@@ -18,7 +19,7 @@ fn text(bytes: &[u8]) -> String {
 }
 
 #[test]
-fn the_old_cells_option_still_works_with_a_warning() {
+fn labels_is_a_list_of_label_values_each_run() {
     let out = std::env::temp_dir().join(format!("sndt-experiment-cli-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&out);
     let run = experiment(&[
@@ -26,52 +27,61 @@ fn the_old_cells_option_still_works_with_a_warning() {
         "--methods",
         "sndt",
         "--labels",
-        "gt",
-        "--cells",
-        "0.1",
+        "pred,gt",
+        "--cell",
+        "0.2",
         "--out",
         out.to_str().unwrap(),
     ]);
     let (stdout, stderr) = (text(&run.stdout), text(&run.stderr));
     assert!(run.status.success(), "{stdout}\n{stderr}");
     assert!(
-        stderr.contains("warning: --cells is deprecated and will be removed; use --cell"),
-        "{stderr}"
-    );
-    assert!(
-        stdout.contains("resumed 0 of 1 runs, computed 1"),
+        stdout.contains("resumed 0 of 2 runs, computed 2"),
         "{stdout}"
     );
-    // The value given to --cells is the one run.
     let table = std::fs::read_to_string(out.join("table1.md")).unwrap();
     assert!(
-        table.starts_with("| labels | method | mIoU 10cm |"),
+        table.contains("| GT segmentation |") && table.contains("| Predicted segmentation |"),
         "{table}"
     );
     let _ = std::fs::remove_dir_all(&out);
 }
 
 #[test]
-fn cells_and_cell_together_are_refused() {
-    let run = experiment(&["synthetic:1:2", "--cells", "0.1", "--cell", "0.2"]);
+fn other_labels_the_old_both_and_the_old_cells_are_refused() {
+    for bad in ["both", "pred-topk", "none", "gt,both"] {
+        let run = experiment(&["synthetic:1:2", "--labels", bad]);
+        assert_eq!(run.status.code(), Some(2), "--labels {bad}");
+        let stderr = text(&run.stderr);
+        assert!(
+            stderr.contains("invalid value") && stderr.contains("[possible values: gt, pred]"),
+            "--labels {bad}: {stderr}"
+        );
+    }
+    let run = experiment(&["synthetic:1:2", "--labels", "gt,gt"]);
+    assert_eq!(run.status.code(), Some(1));
+    let stderr = text(&run.stderr);
+    assert!(stderr.contains("--labels: gt given twice"), "{stderr}");
+    let run = experiment(&["synthetic:1:2", "--cells", "0.1"]);
     assert_eq!(run.status.code(), Some(2));
     let stderr = text(&run.stderr);
-    assert!(
-        stderr.contains("--cells") && stderr.contains("--cell"),
-        "{stderr}"
-    );
+    assert!(stderr.contains("unexpected argument '--cells'"), "{stderr}");
 }
 
 #[test]
-fn help_shows_cell_not_cells_and_ends_with_an_example() {
+fn help_shows_cell_and_the_labels_list_and_ends_with_an_example() {
     let run = experiment(&["--help"]);
     assert!(run.status.success());
     let help = text(&run.stdout);
     assert!(help.contains("--cell <CELL>"), "{help}");
     assert!(!help.contains("--cells"), "{help}");
     assert!(
+        help.contains("[default: gt,pred]") && help.contains("[possible values: gt, pred]"),
+        "{help}"
+    );
+    assert!(
         help.trim_end().ends_with(
-            "Example:\n  sndt experiment synthetic --every 2 --cell 0.05,0.1 --out out/experiment"
+            "  sndt experiment data/synth --labels gt --methods sndt --out out/experiment-gt"
         ),
         "{help}"
     );

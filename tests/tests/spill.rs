@@ -194,7 +194,7 @@ fn merge_command_merges_snapshots_and_streams() {
     let run = |inputs: Vec<std::path::PathBuf>, out: &std::path::Path| {
         merge(&MergeArgs {
             inputs,
-            out: out.to_path_buf(),
+            sndt: out.to_path_buf(),
         })
     };
     run(vec![pa.clone(), pb.clone()], &merged_path).unwrap();

@@ -1,5 +1,6 @@
 //! `sndt cloud`: one frame's world points, coloured by label, as a PLY point cloud.
 
+use crate::cli::open_args::OpenArgs;
 use crate::dataset::frame::FrameId;
 use crate::dataset::open::open_spec;
 use crate::dataset::source::OpenOptions;
@@ -9,35 +10,29 @@ use std::path::{Path, PathBuf};
 
 /// Arguments of `sndt cloud`.
 #[derive(clap::Args, Clone, Debug)]
-#[command(after_help = "Example:
-  sndt cloud data/synth --frame synth_00_living/cam_00/0000 --out out/frame.ply")]
+#[command(after_help = "Examples:
+  sndt cloud data/synth --frame synth_00_living/cam_00/0000 --ply out/frame.ply
+  sndt cloud robot.mcap --world-frame odom --frame robot/cam_00/0010 --ply out/frame.ply")]
 pub struct CloudArgs {
     /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap` file or rosbag2 folder),
     /// `synthetic[:SCENES:FRAMES]` or `synthetic:floor[:WALK[:FRAMES]]` (rendered on the
     /// fly).
-    pub dataset: PathBuf,
+    pub dataset: String,
     /// The frame, as `<scene>/<cam>/<NNNN>`.
     #[arg(long)]
     pub frame: String,
     /// Output PLY file.
     #[arg(long)]
-    pub out: PathBuf,
-    /// Split of the prepared layout.
-    #[arg(long, default_value = "test")]
-    pub split: String,
-    /// Use the authors' v0.3.1 fy = 927.06 (prepared layout without intrinsics).
-    #[arg(long)]
-    pub paper_fy: bool,
+    pub ply: PathBuf,
+    /// How to open the dataset.
+    #[command(flatten)]
+    pub open: OpenArgs,
 }
 
 /// Runs `sndt cloud` and prints what it wrote.
 pub fn run(a: &CloudArgs) -> Result<()> {
-    let options = OpenOptions {
-        split: Some(a.split.clone()),
-        paper_fy: a.paper_fy,
-        ..Default::default()
-    };
-    println!("{}", cloud(&a.dataset, &a.frame, &a.out, &options)?);
+    let root = Path::new(&a.dataset);
+    println!("{}", cloud(root, &a.frame, &a.ply, &a.open.options()?)?);
     Ok(())
 }
 

@@ -2,9 +2,10 @@
 //! ([`crate::eval::compare`]) at each cell size and print how far apart the maps are.
 
 use crate::cli::labels::LabelArg;
+use crate::cli::open_args::{FramesArgs, OpenArgs, PredictionsArgs, StrideArgs};
 use crate::dataset::frame::LabelSource;
 use crate::dataset::open::open_spec;
-use crate::dataset::source::{Dataset, OpenOptions};
+use crate::dataset::source::Dataset;
 use crate::dataset::synthetic::{SynthOptions, Synthetic};
 use crate::eval::compare::{compare_cells, Agreement, CellReport, Options, Report};
 use crate::eval::compare::{CLASSES, TOLERANCES};
@@ -16,8 +17,9 @@ use std::fmt;
 
 /// Arguments of `sndt compare`.
 #[derive(clap::Args, Clone, Debug)]
-#[command(after_help = "Example:
-  sndt compare synthetic --cell 0.05,0.1 --frames 0..20")]
+#[command(after_help = "Examples:
+  sndt compare synthetic --cell 0.05,0.1 --frames 0..20
+  sndt compare robot.mcap --world-frame odom --depth-topic /camera/depth --frames 100")]
 pub struct CompareArgs {
     /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap` file or rosbag2 folder),
     /// `synthetic[:SCENES:FRAMES]` or `synthetic:floor[:WALK[:FRAMES]]` (rendered on the
@@ -26,25 +28,27 @@ pub struct CompareArgs {
     /// Voxel edges in metres, comma separated: the comparison is made at each.
     #[arg(long, value_delimiter = ',', default_value = "0.1", value_parser = super::parse::positive)]
     pub cell: Vec<f32>,
-    /// Which frames of the trajectory: `N` (the first N), `A..B` or `A..` (default: all).
-    #[arg(long, value_name = "N|A..B")]
-    pub frames: Option<String>,
+    /// Which frames of the trajectory.
+    #[command(flatten)]
+    pub frames: FramesArgs,
     /// Labels attached to the points.
     #[arg(long, value_enum, default_value_t = LabelArg::Gt)]
     pub labels: LabelArg,
-    /// Use every stride-th pixel in both directions when mapping (rendering uses all
-    /// pixels).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
-    pub stride: u32,
-    /// Split of the prepared layout.
-    #[arg(long, default_value = "test")]
-    pub split: String,
+    /// Which pixels to integrate (the back-projections render all pixels).
+    #[command(flatten)]
+    pub stride: StrideArgs,
     /// Trajectory `scene/cam` (default: the first).
     #[arg(long)]
     pub trajectory: Option<String>,
     /// Use constant misses instead of NDT-OM misses.
     #[arg(long)]
     pub constant_miss: bool,
+    /// How to open the dataset.
+    #[command(flatten)]
+    pub open: OpenArgs,
+    /// Where the predicted labels are.
+    #[command(flatten)]
+    pub predictions: PredictionsArgs,
 }
 
 /// Runs `sndt compare` and prints the report ([`ReportTable`]).
@@ -71,7 +75,7 @@ pub fn compare_report(args: &CompareArgs) -> Result<Report> {
             args.trajectory.as_deref().unwrap_or("")
         )
     })?;
-    let range = super::parse::frame_range(args.frames.as_deref(), ids.len())?;
+    let range = args.frames.range(ids.len())?;
     let ids = &ids[range.clone()];
     let configs = configs(&args.cell, args.constant_miss)?;
     let source = format!(
@@ -82,7 +86,7 @@ pub fn compare_report(args: &CompareArgs) -> Result<Report> {
     );
     let options = Options {
         labels,
-        stride: args.stride.max(1),
+        stride: args.stride.stride.max(1),
     };
     compare_cells(source, ids.len(), &configs, &options, |i| {
         Ok(Cow::Owned(data.load(&ids[i])?))
@@ -100,11 +104,7 @@ fn open_dataset(args: &CompareArgs, labels: LabelSource) -> Result<Box<dyn Datas
             ..SynthOptions::default()
         })?));
     }
-    let options = OpenOptions {
-        split: Some(args.split.clone()),
-        ..Default::default()
-    };
-    open_spec(&args.dataset, &options)
+    open_spec(&args.dataset, &args.open.options_with(&args.predictions)?)
 }
 
 /// One valid core configuration per cell size.

@@ -33,9 +33,6 @@ pub struct DemoArgs {
     /// frames (of this many, when more).
     #[arg(long, value_name = "N", default_value_t = 20)]
     pub frames_per_scene: usize,
-    /// Deprecated spelling of --frames-per-scene.
-    #[arg(long, hide = true, conflicts_with = "frames_per_scene")]
-    pub frames: Option<usize>,
     /// Use constant misses instead of NDT-OM misses.
     #[arg(long)]
     pub constant_miss: bool,
@@ -49,7 +46,6 @@ impl Default for DemoArgs {
             cell: 0.10,
             scenes: 2,
             frames_per_scene: 20,
-            frames: None,
             constant_miss: false,
         }
     }
@@ -64,16 +60,6 @@ struct Runs {
 /// Runs the demo and prints its report.
 pub fn run(a: &DemoArgs) -> Result<()> {
     let start = Instant::now();
-    let a = &DemoArgs {
-        frames_per_scene: super::parse::renamed(
-            a.frames_per_scene,
-            a.frames,
-            "--frames",
-            "--frames-per-scene",
-        ),
-        frames: None,
-        ..a.clone()
-    };
     let config = map_config(a);
     super::parse::check_cell_config(&config, a.cell)?;
     let split = walk_split(a)?;

@@ -7,39 +7,17 @@
 //! stored runs and the reports are all the experiment's own
 //! ([`crate::eval::experiment`]).
 
-use crate::cli::open_args::OpenArgs;
-use crate::cli::parse::renamed;
-use crate::dataset::frame::LabelSource;
+use crate::cli::labels::{check_labels, LabelArg};
+use crate::cli::open_args::{EveryArgs, OpenArgs, PredictionsArgs};
 use crate::dataset::open::open_spec;
-use crate::dataset::source::{Dataset, Every};
+use crate::dataset::source::Dataset;
 use crate::eval::experiment::store::Manifest;
 use crate::eval::experiment::{run_experiment, Experiment, ExperimentOptions, ExperimentRequest};
 use crate::eval::experiment::{Finished, Method};
 use anyhow::{bail, Result};
+use clap::ValueEnum;
 use sndt_core::Config;
 use std::path::PathBuf;
-
-/// Which labels an experiment maps with: ground truth, predicted top-1, or both (ground
-/// truth first).
-// The variants have no doc comments: clap would print them in `--help`, whose text stays
-// a plain list of the possible values.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum ExperimentLabels {
-    Gt,
-    Pred,
-    Both,
-}
-
-impl ExperimentLabels {
-    /// The label sources to run, in order.
-    pub fn sources(self) -> Vec<LabelSource> {
-        match self {
-            ExperimentLabels::Gt => vec![LabelSource::Gt],
-            ExperimentLabels::Pred => vec![LabelSource::Pred],
-            ExperimentLabels::Both => vec![LabelSource::Gt, LabelSource::Pred],
-        }
-    }
-}
 
 /// `--methods`: the command line's name for [`Method`], so that clap stays in `cli`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -64,23 +42,22 @@ impl From<MethodArg> for Method {
 
 /// Arguments of `sndt experiment`.
 #[derive(clap::Args, Clone, Debug)]
-#[command(
-    after_help = "Example:\n  sndt experiment synthetic --every 2 --cell 0.05,0.1 --out out/experiment"
-)]
+#[command(after_help = "Examples:
+  sndt experiment synthetic --every 2 --cell 0.05,0.1 --out out/experiment
+  sndt experiment data/synth --labels gt --methods sndt --out out/experiment-gt")]
 pub struct ExperimentArgs {
-    /// Dataset directory (prepared layout or raw Hypersim), `synthetic[:SCENES:FRAMES]` or
-    /// `synthetic:floor[:WALK[:FRAMES]]`.
+    /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap` file or
+    /// rosbag2 folder), `synthetic[:SCENES:FRAMES]` or `synthetic:floor[:WALK[:FRAMES]]`
+    /// (rendered on the fly).
     pub dataset: String,
-    /// Labels fed to the maps.
-    #[arg(long, value_enum, default_value = "both")]
-    pub labels: ExperimentLabels,
+    /// Labels fed to the maps, comma separated: each is run in turn (the values of `sndt
+    /// map --labels`, of which the paper's comparison takes ground truth and predicted top
+    /// 1).
+    #[arg(long, value_delimiter = ',', default_value = "gt,pred", value_parser = super::labels::gt_or_pred())]
+    pub labels: Vec<LabelArg>,
     /// Cell sizes, metres (comma-separated).
     #[arg(long, value_delimiter = ',', default_value = "0.05,0.1,0.15,0.2", value_parser = super::parse::positive)]
     pub cell: Vec<f32>,
-    /// `--cell`'s old spelling, hidden: taken with a deprecation warning, so that scripts
-    /// written before the rename still run (one spelling of cell sizes across commands).
-    #[arg(long, hide = true, conflicts_with = "cell", value_delimiter = ',', value_parser = super::parse::positive)]
-    pub cells: Option<Vec<f32>>,
     /// Kernel lengths of S-BKI and OS-BKI, metres.
     #[arg(long, value_delimiter = ',', default_value = "0.1,0.2,0.3,0.4", value_parser = super::parse::positive)]
     pub kernels: Vec<f32>,
@@ -99,10 +76,9 @@ pub struct ExperimentArgs {
     /// `Config::votes_per_frame`).
     #[arg(long, default_value_t = Config::DEFAULT.votes_per_frame)]
     pub votes_per_frame: u8,
-    /// Use every k-th frame of each trajectory (frames 0, k, 2k, ...; 1 = all, as the
-    /// paper). The same option as `map`'s, refusing 0 as it does.
-    #[arg(long, value_name = "K", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
-    pub every: u32,
+    /// Which frames to map.
+    #[command(flatten)]
+    pub every: EveryArgs,
     /// Output directory for tables and charts. Each finished run (one map on one
     /// trajectory) is also kept in `<out>/runs/` as soon as it is finished.
     #[arg(long, default_value = "out/experiment")]
@@ -117,15 +93,17 @@ pub struct ExperimentArgs {
     /// How to open the dataset.
     #[command(flatten)]
     pub open: OpenArgs,
+    /// Where the predicted labels are.
+    #[command(flatten)]
+    pub predictions: PredictionsArgs,
 }
 
 impl ExperimentArgs {
-    /// The experiment's grid these arguments ask for; `--cells` (the old spelling of
-    /// `--cell`) is taken with a warning on stderr.
+    /// The experiment's grid these arguments ask for.
     pub fn options(&self) -> ExperimentOptions {
         ExperimentOptions {
-            labels: self.labels.sources(),
-            cells: renamed(self.cell.clone(), self.cells.clone(), "--cells", "--cell"),
+            labels: self.labels.iter().map(|&l| l.into()).collect(),
+            cells: self.cell.clone(),
             kernels: self.kernels.clone(),
             methods: self.methods.iter().map(|&m| m.into()).collect(),
             free_resolution: self.free_resolution,
@@ -139,8 +117,11 @@ impl ExperimentArgs {
     pub fn request(&self) -> ExperimentRequest {
         let provenance: Manifest = [
             ("dataset", self.dataset.clone()),
-            ("--every", self.every.max(1).to_string()),
-            ("dataset options", format!("{:?}", self.open)),
+            ("--every", self.every.every.max(1).to_string()),
+            (
+                "dataset options",
+                format!("{:?} {:?}", self.open, self.predictions),
+            ),
         ]
         .into_iter()
         .map(|(k, v)| (k.to_string(), v))
@@ -153,23 +134,22 @@ impl ExperimentArgs {
         }
     }
 
-    /// Opens the dataset (every k-th frame with `--every`) and says which it is; predicted
-    /// labels asked of a dataset without predictions are refused, since maps without
-    /// labels would score 0 % and look like a result.
+    /// Opens the dataset (every k-th frame with `--every`) and says which it is. A label
+    /// given twice is refused (its runs would be made twice), and so are predicted labels
+    /// asked of a dataset without predictions, since maps without labels would score 0 %
+    /// and look like a result.
     fn open_dataset(&self) -> Result<Box<dyn Dataset>> {
-        let mut dataset = open_spec(&self.dataset, &self.open.options()?)?;
-        if self.every > 1 {
-            dataset = Box::new(Every::new(dataset, self.every));
+        for (k, label) in self.labels.iter().enumerate() {
+            if self.labels[..k].contains(label) {
+                let name = label.to_possible_value().map(|v| v.get_name().to_string());
+                bail!("--labels: {} given twice", name.unwrap_or_default());
+            }
         }
+        let options = self.open.options_with(&self.predictions)?;
+        let dataset = self.every.apply(open_spec(&self.dataset, &options)?);
         println!("sndt experiment: {}", dataset.describe());
-        if self.labels != ExperimentLabels::Gt
-            && let Some(place) = dataset.missing_predictions()
-        {
-            let option = format!("{:?}", self.labels).to_lowercase();
-            bail!(
-                "--labels {option}: {} has no predictions: {place}",
-                self.dataset
-            );
+        for &label in &self.labels {
+            check_labels(label, dataset.as_ref(), &self.dataset)?;
         }
         Ok(dataset)
     }

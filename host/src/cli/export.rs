@@ -6,7 +6,7 @@
 //! grows).
 
 use crate::cli::labels::{check_labels, LabelArg};
-use crate::cli::open_args::{EveryArgs, OpenArgs};
+use crate::cli::open_args::{EveryArgs, OpenArgs, PredictionsArgs};
 use crate::cli::parse::check_cell_config;
 use crate::dataset::open::open_spec;
 use crate::dataset::ros::msgs::Time;
@@ -68,6 +68,9 @@ pub struct ExportArgs {
     /// map bag is attached to).
     #[command(flatten)]
     pub open: OpenArgs,
+    /// Where the predicted labels are (when mapping a dataset).
+    #[command(flatten)]
+    pub predictions: PredictionsArgs,
     /// Which frames to map (when mapping a dataset).
     #[command(flatten)]
     pub every: EveryArgs,
@@ -86,7 +89,7 @@ pub fn run(a: &ExportArgs) -> Result<()> {
         OctoFormat::of(o)?;
     }
     let mut bag = match &a.mcap {
-        Some(p) => Some(MapBag::create(p, &a.open.world_frame, Time::default())?),
+        Some(p) => Some(MapBag::create(p, &a.open.bag.world_frame, Time::default())?),
         None => None,
     };
     let map = if is_snapshot {
@@ -153,7 +156,7 @@ fn write_ply(ply: &Path, map: &HostMap, a: &ExportArgs) -> Result<()> {
     Ok(())
 }
 
-/// Maps the first trajectory of the dataset `a.input` (opened with `a.open`, every
+/// Maps the first trajectory of the dataset `a.input` (opened with `a.open` and `a.predictions`, every
 /// `a.every`-th frame) at `a.cell` with `a.labels`, skipping bad frames with a warning
 /// ([`usable_frames`]); with a bag, writes the map into it every `a.mcap_interval` frames
 /// (if given) and after the last frame mapped, stamped with the frame's recording time (or
@@ -162,7 +165,8 @@ fn map_first_trajectory(a: &ExportArgs, mut bag: Option<&mut MapBag>) -> Result<
     let (spec, cell, labels) = (a.input.as_str(), a.cell, a.labels);
     let config = Config::with_cell_size(cell);
     check_cell_config(&config, cell)?;
-    let dataset = a.every.apply(open_spec(spec, &a.open.options()?)?);
+    let options = a.open.options_with(&a.predictions)?;
+    let dataset = a.every.apply(open_spec(spec, &options)?);
     check_labels(labels, dataset.as_ref(), spec)?;
     let trajectories = dataset.trajectories();
     let (name, ids) = trajectories

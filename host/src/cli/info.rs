@@ -2,7 +2,7 @@
 //! transform tree's frames and roots) and then what `sndt map` would use of it, or what it
 //! lacks.
 
-use super::open_args::OpenArgs;
+use super::open_args::BagArgs;
 use crate::dataset::ros::bag::Bag;
 use crate::dataset::ros::index::BagIndex;
 use crate::dataset::ros::stamp_text;
@@ -13,21 +13,21 @@ use std::path::PathBuf;
 
 /// Arguments of `sndt info`.
 #[derive(clap::Args, Clone, Debug)]
-#[command(after_help = "Example:
+#[command(after_help = "Examples:
   sndt info robot.mcap --world-frame odom
   sndt info rosbag2_2026_11_27-10_00_00/")]
 pub struct InfoArgs {
     /// The recording: an `.mcap` file or a rosbag2 folder (`metadata.yaml` and its split
     /// `.mcap` files), ROS 2 messages in CDR.
     pub bag: PathBuf,
-    /// Topics, world frame and sync tolerance, as for `sndt map`.
+    /// Topics, world frame, label map and sync tolerance, as for `sndt map`.
     #[command(flatten)]
-    pub open: OpenArgs,
+    pub bag_options: BagArgs,
 }
 
 /// Runs `sndt info`: the report on stdout; an error after it when the bag cannot be mapped.
 pub fn run(a: &InfoArgs) -> Result<()> {
-    let options = a.open.options()?.bag;
+    let options = a.bag_options.options()?;
     let index = BagIndex::open(&a.bag)?;
     print!("{}", contents(&index));
     match Bag::new(index, &options) {

@@ -4,8 +4,8 @@ use crate::dataset::frame::LabelSource;
 use crate::dataset::source::Dataset;
 use clap::ValueEnum;
 
-/// Which labels to attach to points (`--labels` of `map`, `export` and `compare`); the
-/// variants, their spelling (`gt`, `pred`, `pred-topk`, `none`) and their help are those of
+/// Which labels to attach to points (`--labels` of `map`, `export` and `compare`; a list of
+/// `gt` and `pred` in `experiment`); the variants, their spelling (`gt`, `pred`, `pred-topk`, `none`) and their help are those of
 /// [`LabelSource`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum LabelArg {
@@ -28,6 +28,29 @@ impl From<LabelArg> for LabelSource {
             LabelArg::None => LabelSource::None,
         }
     }
+}
+
+/// The value parser of `--labels` where only ground-truth and predicted top-1 labels can
+/// be run (`sndt experiment`, the paper's comparison): `gt` and `pred`, spelled and meaning
+/// as in [`LabelArg`]; `--help` lists only these two, and any other value is refused with
+/// the two named.
+///
+/// ```
+/// use clap::Parser;
+/// use sndt_host::cli::labels::{gt_or_pred, LabelArg};
+/// #[derive(Parser)]
+/// struct Line {
+///     #[arg(long, value_delimiter = ',', value_parser = gt_or_pred())]
+///     labels: Vec<LabelArg>,
+/// }
+/// let line = Line::try_parse_from(["x", "--labels", "gt,pred"]).unwrap();
+/// assert_eq!(line.labels, [LabelArg::Gt, LabelArg::Pred]);
+/// assert!(Line::try_parse_from(["x", "--labels", "pred-topk"]).is_err());
+/// ```
+pub fn gt_or_pred() -> impl clap::builder::TypedValueParser<Value = LabelArg> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(["gt", "pred"])
+        .try_map(|name| LabelArg::from_str(&name, false))
 }
 
 /// Refuses `--labels pred` / `pred-topk` for a dataset without predictions (the map would

@@ -2,7 +2,7 @@
 //! paper's evaluation protocol (docs/ARCHITECTURE.md).
 
 use crate::cli::labels::{check_labels, LabelArg};
-use crate::cli::open_args::{EveryArgs, OpenArgs};
+use crate::cli::open_args::{EveryArgs, OpenArgs, PredictionsArgs, StrideArgs};
 use crate::cli::parse::check_config;
 use crate::dataset::frame::LabelSource;
 use crate::dataset::open::open_spec;
@@ -37,12 +37,15 @@ pub struct MapArgs {
     /// How to open the dataset.
     #[command(flatten)]
     pub open: OpenArgs,
+    /// Where the predicted labels are.
+    #[command(flatten)]
+    pub predictions: PredictionsArgs,
     /// Which frames to map.
     #[command(flatten)]
     pub every: EveryArgs,
-    /// Use every stride-th pixel in both directions when mapping (1 = all, as the paper).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
-    pub stride: u32,
+    /// Which pixels to integrate.
+    #[command(flatten)]
+    pub stride: StrideArgs,
     /// About how many votes a voxel takes from one frame (1..=64; `Config::votes_per_frame`).
     #[arg(long, default_value_t = Config::DEFAULT.votes_per_frame)]
     pub votes_per_frame: u8,
@@ -91,7 +94,8 @@ pub fn run(a: &MapArgs) -> Result<()> {
             (ConfigField::VotesPerFrame, &votes),
         ],
     )?;
-    let dataset = a.every.apply(open_spec(&a.dataset, &a.open.options()?)?);
+    let options = a.open.options_with(&a.predictions)?;
+    let dataset = a.every.apply(open_spec(&a.dataset, &options)?);
     check_labels(a.labels, dataset.as_ref(), &a.dataset)?;
     println!("sndt map: {}", dataset.describe());
     let frames = dataset.frames().len();
@@ -100,11 +104,11 @@ pub fn run(a: &MapArgs) -> Result<()> {
         dataset.as_ref(),
         &EvalOptions {
             out: Some(a.out.clone()),
-            stride: a.stride,
+            stride: a.stride.stride,
             save_maps: a.save_maps.then(|| a.out.join("maps")),
             mcap: a.mcap.clone(),
             mcap_interval: a.mcap_interval,
-            mcap_world: a.open.world_frame.clone(),
+            mcap_world: a.open.bag.world_frame.clone(),
             device: a.device.map(|d| {
                 let readout = if a.device_only {
                     Spill::DeviceOnly

@@ -7,17 +7,17 @@ use std::path::PathBuf;
 /// Arguments of `sndt merge`.
 #[derive(clap::Args, Clone, Debug)]
 #[command(after_help = "Examples:
-  sndt merge out/a/maps/floor.sndt out/b/maps/floor.sndt --out out/both.sndt
-  sndt merge uart.bin --out out/device.sndt")]
+  sndt merge out/a/maps/floor.sndt out/b/maps/floor.sndt --sndt out/both.sndt
+  sndt merge uart.bin --sndt out/device.sndt")]
 pub struct MergeArgs {
     /// Map snapshots (`.sndt`, as `sndt map --save-maps` writes) or record streams (the
     /// COBS-framed records a device sends over a UART), merged in this order. All must
     /// have the same config.
     #[arg(required = true, num_args = 1..)]
     pub inputs: Vec<PathBuf>,
-    /// Where to write the merged map snapshot.
+    /// Output map snapshot file (`.sndt`) of the merged map.
     #[arg(long)]
-    pub out: PathBuf,
+    pub sndt: PathBuf,
 }
 
 /// Runs `sndt merge`: reads and checks every input, merges them in order into a map that
@@ -62,7 +62,7 @@ pub fn run(a: &MergeArgs) -> Result<()> {
     let Some(map) = merged else {
         bail!("nothing to merge");
     };
-    crate::atomic::write_bytes(&a.out, map.snapshot()?)?;
+    crate::atomic::write_bytes(&a.sndt, map.snapshot()?)?;
     println!(
         "merged: {} voxels, {} blocks, {} frames; map of tier {} ({:.0} MiB); crc 0x{:08x}; wrote {}",
         map.len(),
@@ -71,7 +71,7 @@ pub fn run(a: &MergeArgs) -> Result<()> {
         map.tier(),
         map.memory_bytes() as f64 / (1 << 20) as f64,
         map.checksum(),
-        a.out.display()
+        a.sndt.display()
     );
     Ok(())
 }

@@ -7,8 +7,12 @@
 //!
 //! An option has one meaning in every command that has it (`--every K`: every k-th frame;
 //! `--frames`: which frames, `N` or `A..B`; `--cell`: voxel edges in metres; `--stride`:
-//! every stride-th pixel), and each command's `--help` ends with an example command line
-//! (clap's `after_help`, on its `Args` struct), which a test parses.
+//! every stride-th pixel; `--labels`: `gt`, `pred`, `pred-topk`, `none`; `--out`: an output
+//! directory, while an output file is named by its format: `--ply`, `--octomap`, `--mcap`,
+//! `--sndt`, `--points-file`). An option several commands have is declared once, in
+//! [`open_args`] (the dataset's options, `--every`, `--frames`, `--stride`), and each
+//! command's `--help` ends with an example command line (clap's `after_help`, on its `Args`
+//! struct), which a test parses.
 
 pub mod budget;
 pub mod cloud;
@@ -37,56 +41,57 @@ struct Cli {
     command: Command,
 }
 
-/// The commands of `sndt`, in the order `sndt --help` lists them.
+/// The commands of `sndt`, in the order `sndt --help` lists them: the README's command
+/// table's order, the main job first (a test checks that they agree).
 #[derive(Subcommand)]
 enum Command {
     /// Map a small synthetic split (no download) with GT and predicted labels; metrics and pictures.
     Demo(demo::DemoArgs),
-    /// Exact memory of a Map<N, B, K>; with a dataset, peak voxels, evictions and the spill
-    /// bandwidth per trajectory.
-    Budget(budget::BudgetArgs),
-    /// Write (--out) or check (--check) the cross-architecture test vector of the firmware.
-    Testvector(testvector::TestvectorArgs),
-    /// Write one frame's world points, coloured by label, as a PLY point cloud.
-    Cloud(cloud::CloudArgs),
-    /// Write frames' sensor origins and world points as a raw binary file (SNDTPTS1), the
-    /// input of the OctoMap peer benchmark.
-    Points(points::PointsArgs),
     /// Generate a synthetic labelled split in the prepared layout and/or as ROS 2 bags.
     Synth(synth::SynthArgs),
-    /// List a ROS 2 bag's (MCAP) topics and what `sndt map` would use of it.
-    Info(info::InfoArgs),
     /// Map every trajectory of a dataset and evaluate the back-projections with the paper's
     /// evaluation protocol (docs/ARCHITECTURE.md).
     Map(map::MapArgs),
     /// Merge saved maps and devices' record streams into one map (two robots, two
     /// sessions, a co-processor's spill).
     Merge(merge::MergeArgs),
-    /// Write a map's Gaussians as a PLY (points or ellipsoids) for MeshLab/CloudCompare, its
-    /// occupancy as an OctoMap (.bt, .ot) and / or both as a ROS 2 bag.
-    Export(export::ExportArgs),
-    /// Integrate frames into the core and the f64 reference and compare them per cell size.
-    Compare(compare::CompareArgs),
     /// The paper's comparison: S-NDT, S-BKI and OS-BKI per cell size and kernel length;
     /// Tables I and II (Markdown, CSV), per-class IoU and rate-vs-mIoU charts.
     Experiment(experiment::ExperimentArgs),
+    /// Integrate frames into the core and the f64 reference and compare them per cell size.
+    Compare(compare::CompareArgs),
+    /// Exact memory of a Map<N, B, K>; with a dataset, peak voxels, evictions and the spill
+    /// bandwidth per trajectory.
+    Budget(budget::BudgetArgs),
+    /// Write a map's Gaussians as a PLY (points or ellipsoids) for MeshLab/CloudCompare, its
+    /// occupancy as an OctoMap (.bt, .ot) and / or both as a ROS 2 bag.
+    Export(export::ExportArgs),
+    /// List a ROS 2 bag's (MCAP) topics and what `sndt map` would use of it.
+    Info(info::InfoArgs),
+    /// Write one frame's world points, coloured by label, as a PLY point cloud.
+    Cloud(cloud::CloudArgs),
+    /// Write frames' sensor origins and world points as a raw binary file (SNDTPTS1), the
+    /// input of the OctoMap peer benchmark.
+    Points(points::PointsArgs),
+    /// Write (--out) or check (--check) the cross-architecture test vector of the firmware.
+    Testvector(testvector::TestvectorArgs),
 }
 
 /// Parses the command line and runs the command.
 pub fn main() -> Result<()> {
     match Cli::parse().command {
         Command::Demo(a) => demo::run(&a),
-        Command::Budget(a) => budget::run(&a),
-        Command::Testvector(a) => testvector::run(&a),
-        Command::Cloud(a) => cloud::run(&a),
-        Command::Points(a) => points::run(&a),
         Command::Synth(a) => synth::run(&a),
-        Command::Info(a) => info::run(&a),
         Command::Map(a) => map::run(&a),
         Command::Merge(a) => merge::run(&a),
-        Command::Export(a) => export::run(&a),
-        Command::Compare(a) => compare::run(&a),
         Command::Experiment(a) => experiment::run(&a),
+        Command::Compare(a) => compare::run(&a),
+        Command::Budget(a) => budget::run(&a),
+        Command::Export(a) => export::run(&a),
+        Command::Info(a) => info::run(&a),
+        Command::Cloud(a) => cloud::run(&a),
+        Command::Points(a) => points::run(&a),
+        Command::Testvector(a) => testvector::run(&a),
     }
 }
 
@@ -94,6 +99,41 @@ pub fn main() -> Result<()> {
 mod tests {
     use super::Cli;
     use clap::{CommandFactory, Parser};
+
+    /// The commands of the README's command table, in its order: the first word of each
+    /// `code` span in the first column of the rows after `| command | what |`.
+    fn readme_commands(readme: &str) -> Vec<String> {
+        let table = readme
+            .split_once("| command | what |")
+            .expect("README.md has the command table")
+            .1;
+        let rows = table.lines().skip(2).take_while(|l| l.starts_with('|'));
+        let mut commands = Vec::new();
+        for row in rows {
+            let first_column = row
+                .trim_start_matches('|')
+                .split(" | ")
+                .next()
+                .unwrap_or("");
+            let spans = first_column.split('`').skip(1).step_by(2);
+            commands.extend(spans.filter_map(|s| s.split_whitespace().next().map(String::from)));
+        }
+        commands
+    }
+
+    /// `sndt --help` lists the commands in the README's order, so that the two cannot drift
+    /// apart.
+    #[test]
+    fn help_lists_the_commands_in_the_readmes_order() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../README.md");
+        let readme = std::fs::read_to_string(path).expect("README.md");
+        let help: Vec<String> = Cli::command()
+            .get_subcommands()
+            .map(|c| c.get_name().to_string())
+            .collect();
+        assert_eq!(help, readme_commands(&readme));
+        assert_eq!(help[0], "demo", "the main job first");
+    }
 
     /// The example command lines of a help text: its lines `  sndt ...`.
     fn examples(help: &str) -> Vec<&str> {

@@ -1,25 +1,80 @@
-//! The dataset options commands share: how to open a dataset ([`OpenArgs`]: `--split`,
-//! `--paper-fy`, `--predictions`, and for ROS 2 bags the topics, world frame and sync
-//! tolerance) and which of its frames to map ([`EveryArgs`]: `--every`).
+//! The options commands share, each declared once here so that it is spelled, documented
+//! and checked the same way in every command that has it.
+//!
+//! Every command that takes a dataset flattens [`OpenArgs`]: how to open a directory
+//! ([`LayoutArgs`]: `--split`, `--paper-fy`) and a ROS 2 bag ([`BagArgs`]: topics, world
+//! frame, label map, sync tolerance). `sndt info` reads bags only and flattens
+//! [`BagArgs`] alone. The commands that can map predicted labels add
+//! [`PredictionsArgs`] (`--predictions`). Which frames and pixels to use: [`EveryArgs`]
+//! (`--every`), [`FramesArgs`] (`--frames`), [`StrideArgs`] (`--stride`).
 
-use crate::dataset::source::{Dataset, Every, OpenOptions};
+use crate::dataset::source::{BagOptions, Dataset, Every, OpenOptions};
+use std::ops::Range;
 use std::path::PathBuf;
 
-/// How to open a dataset directory (shared by `map`, `export`, `experiment`, `points` and
-/// `info`).
-#[derive(clap::Args, Clone, Debug)]
+/// How to open a dataset: a directory's options and a bag's (shared by every command that
+/// takes a dataset).
+#[derive(clap::Args, Clone, Debug, Default)]
 pub struct OpenArgs {
+    /// How to open a directory.
+    #[command(flatten)]
+    pub layout: LayoutArgs,
+    /// How to open a ROS 2 bag.
+    #[command(flatten)]
+    pub bag: BagArgs,
+}
+
+impl OpenArgs {
+    /// The options the dataset readers take, without predictions.
+    pub fn options(&self) -> anyhow::Result<OpenOptions> {
+        self.options_with(&PredictionsArgs::default())
+    }
+
+    /// The options the dataset readers take, with the predictions `predictions` names.
+    pub fn options_with(&self, predictions: &PredictionsArgs) -> anyhow::Result<OpenOptions> {
+        Ok(OpenOptions {
+            split: Some(self.layout.split.clone()),
+            paper_fy: self.layout.paper_fy,
+            predictions: predictions.predictions.clone(),
+            bag: self.bag.options()?,
+        })
+    }
+}
+
+/// How to open a dataset directory (prepared layout or raw Hypersim).
+#[derive(clap::Args, Clone, Debug)]
+pub struct LayoutArgs {
     /// Split of the prepared layout.
     #[arg(long, default_value = "test")]
     pub split: String,
     /// Use the authors' v0.3.1 fy = 927.06 (prepared layout without intrinsics).
     #[arg(long)]
     pub paper_fy: bool,
+}
+
+impl Default for LayoutArgs {
+    /// The command line's defaults.
+    fn default() -> Self {
+        LayoutArgs {
+            split: "test".into(),
+            paper_fy: false,
+        }
+    }
+}
+
+/// Where a dataset directory's predicted labels are (for the commands that can map them).
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct PredictionsArgs {
     /// Directory of ESANet `.npy` predictions.
     #[arg(long)]
     pub predictions: Option<PathBuf>,
-    /// ROS 2 bag: frame the camera poses are in. A map written as a bag (`--mcap`) is
-    /// attached to this frame.
+}
+
+/// How to read a ROS 2 bag: its topics, world frame, label map and sync tolerance.
+#[derive(clap::Args, Clone, Debug)]
+pub struct BagArgs {
+    /// ROS 2 bag: frame the camera poses are in (and the frame a map bag written with
+    /// `--mcap` is attached to).
     #[arg(long, default_value = "world")]
     pub world_frame: String,
     /// ROS 2 bag: depth topic (default: the 16UC1 / 32FC1 image topic).
@@ -45,32 +100,41 @@ pub struct OpenArgs {
     pub sync_tolerance: f64,
 }
 
-impl OpenArgs {
-    /// The options the dataset readers take.
-    pub fn options(&self) -> anyhow::Result<OpenOptions> {
+impl Default for BagArgs {
+    /// The command line's defaults.
+    fn default() -> Self {
+        BagArgs {
+            world_frame: "world".into(),
+            depth_topic: None,
+            labels_topic: None,
+            pose_topic: None,
+            label_map: None,
+            camera_info_topic: None,
+            sync_tolerance: 0.0,
+        }
+    }
+}
+
+impl BagArgs {
+    /// The options the bag reader takes (reading the `--label-map` file).
+    pub fn options(&self) -> anyhow::Result<BagOptions> {
         let label_map = match &self.label_map {
             Some(path) => read_label_map(path)?,
             None => Vec::new(),
         };
-        Ok(OpenOptions {
-            split: Some(self.split.clone()),
-            paper_fy: self.paper_fy,
-            predictions: self.predictions.clone(),
-            bag: crate::dataset::source::BagOptions {
-                world_frame: Some(self.world_frame.clone()),
-                pose_topic: self.pose_topic.clone(),
-                label_map,
-                depth_topic: self.depth_topic.clone(),
-                labels_topic: self.labels_topic.clone(),
-                camera_info_topic: self.camera_info_topic.clone(),
-                sync_tolerance_ns: (self.sync_tolerance.max(0.0) * 1e9) as u64,
-            },
+        Ok(BagOptions {
+            world_frame: Some(self.world_frame.clone()),
+            pose_topic: self.pose_topic.clone(),
+            label_map,
+            depth_topic: self.depth_topic.clone(),
+            labels_topic: self.labels_topic.clone(),
+            camera_info_topic: self.camera_info_topic.clone(),
+            sync_tolerance_ns: (self.sync_tolerance.max(0.0) * 1e9) as u64,
         })
     }
 }
 
-/// Which frames of a dataset to map (`--every`, shared by `map` and `export`; `experiment`
-/// has the same option).
+/// Which frames of a dataset to map: every k-th of each trajectory.
 #[derive(clap::Args, Clone, Debug)]
 pub struct EveryArgs {
     /// Use every k-th frame of each trajectory (frames 0, k, 2k, ...; 1 = all, as the
@@ -94,6 +158,37 @@ impl EveryArgs {
             dataset
         }
     }
+}
+
+/// Which frames to use, as a range of the frames in the order they are used.
+#[derive(clap::Args, Clone, Debug)]
+pub struct FramesArgs {
+    /// Which frames, counted from 0 in the order they are used (trajectory, then index):
+    /// `N` (the first N), `A..B` or `A..` (default: all).
+    #[arg(long, value_name = "N|A..B")]
+    pub frames: Option<String>,
+}
+
+impl FramesArgs {
+    /// The range `--frames` selects of `len` frames ([`super::parse::frame_range`]).
+    ///
+    /// ```
+    /// use sndt_host::cli::open_args::FramesArgs;
+    /// assert_eq!(FramesArgs { frames: Some("2..5".into()) }.range(10).unwrap(), 2..5);
+    /// assert_eq!(FramesArgs { frames: None }.range(10).unwrap(), 0..10);
+    /// ```
+    pub fn range(&self, len: usize) -> anyhow::Result<Range<usize>> {
+        super::parse::frame_range(self.frames.as_deref(), len)
+    }
+}
+
+/// Which pixels of a frame to integrate.
+#[derive(clap::Args, Clone, Debug)]
+pub struct StrideArgs {
+    /// Use every stride-th pixel in both directions of each frame integrated (1 = all, as
+    /// the paper).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    pub stride: u32,
 }
 
 /// Reads a label map: `id,class` lines (both 0..=255; `#` comments and blank lines

@@ -49,7 +49,7 @@ pub fn at_least_one(s: &str) -> Result<usize, String> {
     }
 }
 
-/// Parses `--frames` (of `compare` and `points`): `N` = the first N (`0..N`), `A..B`, or
+/// Parses `--frames` ([`super::open_args::FramesArgs`]): `N` = the first N (`0..N`), `A..B`, or
 /// `A..` (to the end), within `0..len`; `None` (option not given) is all frames.
 ///
 /// ```
@@ -147,23 +147,4 @@ pub fn check_cell_config(config: &sndt_core::Config, cell: f32) -> anyhow::Resul
             (ConfigField::RayCells, &option),
         ],
     )
-}
-
-/// The value of an option that was renamed: the old spelling stays as a hidden option (with
-/// `conflicts_with` the new one), and when it is given its value is taken and a warning
-/// names the new spelling on stderr.
-///
-/// ```
-/// use sndt_host::cli::parse::renamed;
-/// assert_eq!(renamed(0.1, None, "--cells", "--cell"), 0.1);
-/// assert_eq!(renamed(0.1, Some(0.2), "--cells", "--cell"), 0.2); // and a warning
-/// ```
-pub fn renamed<T>(new: T, old: Option<T>, old_flag: &str, new_flag: &str) -> T {
-    match old {
-        Some(value) => {
-            eprintln!("warning: {old_flag} is deprecated and will be removed; use {new_flag}");
-            value
-        }
-        None => new,
-    }
 }

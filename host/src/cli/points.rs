@@ -8,7 +8,7 @@
 //! the core integrates them (`frame.pose * depth_point`, in `f32`; points beyond
 //! `max_range` kept).
 
-use crate::cli::open_args::OpenArgs;
+use crate::cli::open_args::{FramesArgs, OpenArgs};
 use crate::dataset::open::open_spec;
 use crate::output::points::write_points;
 use anyhow::Result;
@@ -17,19 +17,18 @@ use std::path::PathBuf;
 /// Arguments of `sndt points`.
 #[derive(clap::Args, Clone, Debug)]
 #[command(after_help = "Example:
-  sndt points data/synth --frames 0..12 --out out/points.bin")]
+  sndt points data/synth --frames 0..12 --points-file out/points.bin")]
 pub struct PointsArgs {
     /// Dataset: a directory (prepared layout or raw Hypersim), a ROS 2 bag (`.mcap` file or rosbag2 folder),
     /// `synthetic[:SCENES:FRAMES]` or `synthetic:floor[:WALK[:FRAMES]]` (rendered on the
     /// fly).
     pub dataset: String,
-    /// Output file (`SNDTPTS1` format).
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Which frames, counted in dataset order (trajectory, then index): `N` (the first N),
-    /// `A..B` or `A..` (default: all), as `sndt compare --frames`.
-    #[arg(long, value_name = "N|A..B")]
-    pub frames: Option<String>,
+    /// Output points file (`SNDTPTS1` format).
+    #[arg(long, value_name = "FILE")]
+    pub points_file: PathBuf,
+    /// Which frames of the dataset.
+    #[command(flatten)]
+    pub frames: FramesArgs,
     /// How to open the dataset.
     #[command(flatten)]
     pub open: OpenArgs,
@@ -39,7 +38,7 @@ pub struct PointsArgs {
 pub fn run(a: &PointsArgs) -> Result<()> {
     let data = open_spec(&a.dataset, &a.open.options()?)?;
     let all = data.frames();
-    let ids = &all[super::parse::frame_range(a.frames.as_deref(), all.len())?];
-    println!("{}", write_points(data.as_ref(), ids, &a.out)?);
+    let ids = &all[a.frames.range(all.len())?];
+    println!("{}", write_points(data.as_ref(), ids, &a.points_file)?);
     Ok(())
 }

@@ -2,7 +2,6 @@
 //! with its class histogram, preview pictures and the raw prediction's score: separate
 //! rooms, or a walk through the building floor.
 
-use crate::cli::parse::renamed;
 use crate::dataset::classes::{render_color, NYU40};
 use crate::dataset::source::Dataset;
 use crate::dataset::synthetic::{floor, write_split, DepthNoise, SynthOptions, Synthetic};
@@ -64,9 +63,6 @@ pub struct SynthArgs {
     /// walk at a lower frame rate) [default: 100, with --scene floor 1000].
     #[arg(long, value_name = "N")]
     pub frames_per_scene: Option<usize>,
-    /// Deprecated spelling of --frames-per-scene.
-    #[arg(long, hide = true, conflicts_with = "frames_per_scene")]
-    pub frames: Option<usize>,
     /// Add range-dependent depth noise (Kinect v1 model).
     #[arg(long)]
     pub noise: bool,
@@ -79,12 +75,6 @@ pub struct SynthArgs {
 /// previews and scores the raw predictions.
 pub fn run(a: &SynthArgs) -> Result<()> {
     let t = Instant::now();
-    let per_scene = renamed(
-        a.frames_per_scene,
-        a.frames.map(Some),
-        "--frames",
-        "--frames-per-scene",
-    );
     let floor_walk = match a.scene {
         SceneArg::Rooms if a.walk.is_some() => bail!("--walk: only with --scene floor"),
         SceneArg::Rooms => None,
@@ -97,7 +87,7 @@ pub fn run(a: &SynthArgs) -> Result<()> {
     };
     let options = SynthOptions {
         scenes: a.scenes.unwrap_or(SynthOptions::default().scenes),
-        frames: per_scene.unwrap_or(default_frames),
+        frames: a.frames_per_scene.unwrap_or(default_frames),
         seed: a.seed,
         noise: a.noise.then_some(DepthNoise::KINECT),
         predictions: !a.no_predictions,
