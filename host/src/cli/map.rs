@@ -1,5 +1,5 @@
 //! `sndt map`: map every trajectory of a dataset and evaluate the back-projections with the
-//! paper's evaluation protocol (docs/ARCHITECTURE.md).
+//! paper's evaluation protocol (docs/EVALUATION.md).
 
 use crate::cli::labels::{check_labels, LabelArg};
 use crate::cli::open_args::{EveryArgs, OpenArgs, PredictionsArgs, StrideArgs};

@@ -50,7 +50,7 @@ enum Command {
     /// Generate a synthetic labelled split in the prepared layout and/or as ROS 2 bags.
     Synth(synth::SynthArgs),
     /// Map every trajectory of a dataset and evaluate the back-projections with the paper's
-    /// evaluation protocol (docs/ARCHITECTURE.md).
+    /// evaluation protocol (docs/EVALUATION.md).
     Map(map::MapArgs),
     /// Merge saved maps and devices' record streams into one map (two robots, two
     /// sessions, a co-processor's spill).

@@ -267,12 +267,12 @@ mod tests {
                 .map(|(k, v)| (k.to_string(), v.to_string()))
                 .collect()
         };
-        let stored = m(&[("--cells", "0.1"), ("--every", "5"), ("dataset", "x")]);
-        let now = m(&[("--cells", "0.2"), ("--every", "5"), ("--labels", "gt")]);
+        let stored = m(&[("--cell", "0.1"), ("--every", "5"), ("dataset", "x")]);
+        let now = m(&[("--cell", "0.2"), ("--every", "5"), ("--labels", "gt")]);
         assert_eq!(
             differences(&stored, &now),
             [
-                "--cells: stored 0.1, now 0.2",
+                "--cell: stored 0.1, now 0.2",
                 "--labels: stored (none), now gt",
                 "dataset: stored x, now (none)"
             ]

@@ -33,11 +33,9 @@ pub fn manifest(plan: &Plan, dataset: &dyn Dataset, provenance: &Manifest) -> Ma
     let free = options
         .free_resolution
         .map_or_else(|| "default".to_string(), |f| f.to_string());
-    // `--cells` is the option's spelling before it became `--cell`: kept, so that a store
-    // written before the rename still resumes (the manifest's key is a name in a file).
     let mut m: Manifest = [
         ("--labels", labels.join(",")),
-        ("--cells", list(&options.cells)),
+        ("--cell", list(&options.cells)),
         ("--kernels", list(&options.kernels)),
         ("--methods", methods.join(",")),
         ("--free-resolution", free),
