@@ -13,26 +13,15 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 TARGET=aarch64-unknown-linux-gnu
-step() { printf '\n==> %s\n' "$*"; }
+. scripts/lib/step.sh
+. scripts/lib/install.sh
+. scripts/lib/vector.sh
 start=$SECONDS
 
 step "aarch64 toolchain (rustup target, cross gcc, qemu-user)"
-if ! rustup target list --installed | grep -qx "$TARGET"; then
-    rustup target add "$TARGET"
-fi
-if ! command -v aarch64-linux-gnu-gcc >/dev/null 2>&1 || ! command -v qemu-aarch64 >/dev/null 2>&1 ||
-    ! [ -e /usr/aarch64-linux-gnu/lib/libc.so.6 ]; then
-    export DEBIAN_FRONTEND=noninteractive
-    apt-get update -qq
-    pkgs=(gcc-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user)
-    # The image may ship qemu-utils from backports, which bookworm's qemu packages can
-    # conflict with; if apt would remove anything, pin the bookworm qemu-utils alongside
-    # (as scripts/firmware.sh does) so qemu-img stays installed.
-    if apt-get install -s --no-install-recommends "${pkgs[@]}" | grep -q '^Remv'; then
-        pkgs+=(qemu-utils/bookworm)
-    fi
-    apt-get install -y -qq --no-install-recommends --allow-downgrades "${pkgs[@]}"
-fi
+ensure_rust_target "$TARGET"
+ensure_packages aarch64-linux-gnu-gcc:gcc-aarch64-linux-gnu libc6-dev-arm64-cross \
+    qemu-aarch64:qemu-user
 
 # Cross linker and the emulator as the test runner (-L: where the aarch64 loader and libc are).
 export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc
@@ -56,7 +45,7 @@ if [ -z "$doctests" ] || [ "$doctests" -eq 0 ]; then
     exit 1
 fi
 
-expected_spill=$(tr -d '[:space:]' <targets/cortex-m4f/vector/expected_spill_crc.txt)
+expected_spill=$(committed_crc expected_spill_crc.txt)
 if ! grep -q '^test spill_run_matches_the_committed_crc \.\.\. ok$' "$log"; then
     echo "error: the spill run's test (core/tests/spill_vector.rs) did not pass on $TARGET" >&2
     exit 1
@@ -69,16 +58,15 @@ C_DIR=targets/c
 prog="$C_DIR/target/$TARGET/vector_crc"
 aarch64-linux-gnu-gcc -std=c99 -O2 -Wall -Wextra -Werror -pedantic -I"$C_DIR/include" \
     "$C_DIR/examples/vector_crc.c" "$C_DIR/target/$TARGET/release/libsndt_c.a" -lm -o "$prog"
-qemu-aarch64 -L /usr/aarch64-linux-gnu "$prog" targets/cortex-m4f/vector/frames.bin | tee -a "$log"
-crc_of() { grep -oE "^$1 crc 0x[0-9a-f]{8}" "$log" | awk '{ print $3 }' | tail -n 1; }
-expected=$(tr -d '[:space:]' <targets/cortex-m4f/vector/expected_crc.txt)
-crc=$(crc_of snapshot)
+qemu-aarch64 -L /usr/aarch64-linux-gnu "$prog" "$VECTOR_DIR/frames.bin" | tee -a "$log"
+expected=$(committed_crc expected_crc.txt)
+crc=$(last_hex "$log" '^snapshot crc')
 if [ "$crc" != "$expected" ]; then
     echo "error: aarch64 snapshot CRC '${crc:-none}' differs from expected_crc.txt ($expected)" >&2
     exit 1
 fi
-expected_render=$(tr -d '[:space:]' <targets/cortex-m4f/vector/expected_render_crc.txt)
-render=$(crc_of render)
+expected_render=$(committed_crc expected_render_crc.txt)
+render=$(last_hex "$log" '^render crc')
 if [ "$render" != "$expected_render" ]; then
     echo "error: aarch64 render CRC '${render:-none}' differs from expected_render_crc.txt ($expected_render)" >&2
     exit 1

@@ -23,14 +23,11 @@ OUT="${OUT:-${CARGO_TARGET_DIR:-target}/bench-bags}"
 # plus camera info, transforms and record headers (measured: about 1.1 kB).
 FRAME_BYTES=2360400
 
-step() { printf '\n==> %s\n' "$*"; }
+. scripts/lib/step.sh
+. scripts/lib/install.sh
 
-if [ ! -x /usr/bin/time ]; then
-    step "GNU time (for the peak RSS)"
-    export DEBIAN_FRONTEND=noninteractive
-    apt-get update -qq
-    apt-get install -y -qq --no-install-recommends time
-fi
+step "GNU time (for the peak RSS)"
+ensure_packages /usr/bin/time:time
 
 step "release build"
 cargo build --release -q -p sndt-host --bin sndt

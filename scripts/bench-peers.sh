@@ -39,8 +39,7 @@ HARNESS="$WORK/octomap_bench"
 CPUS=$(env -u OMP_NUM_THREADS -u OMP_THREAD_LIMIT nproc)
 LOAD=$(cut -d' ' -f1 /proc/loadavg)
 
-step() { printf '\n==> %s\n' "$*"; }
-
+. scripts/lib/step.sh
 . scripts/lib/install.sh
 
 step "OctoMap, g++ and pkg-config"

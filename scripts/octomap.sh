@@ -17,7 +17,7 @@ WORK=target/octomap-check
 VENV=target/ros-venv
 CELL=0.1
 CHECK="$TARGET/octomap/check_octomap"
-step() { printf '\n==> %s\n' "$*"; }
+. scripts/lib/step.sh
 . scripts/lib/install.sh
 
 step "liboctomap-dev, g++ and pkg-config"

@@ -16,10 +16,10 @@ cd "$(dirname "$0")/.."
 
 VENV=target/ros-venv
 WORK=target/ros-check
-step() { printf '\n==> %s\n' "$*"; }
+. scripts/lib/step.sh
+. scripts/lib/install.sh
 
 step "Python readers/writers (mcap, mcap-ros2-support, rosbags, pypng) in $VENV"
-. scripts/lib/install.sh
 ensure_ros_venv "$VENV"
 PY="$VENV/bin/python"
 
