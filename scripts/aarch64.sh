@@ -11,11 +11,9 @@
 # Installs what it needs when missing (idempotent; fast when everything is present).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/lib/common.sh
 
 TARGET=aarch64-unknown-linux-gnu
-. scripts/lib/step.sh
-. scripts/lib/install.sh
-. scripts/lib/vector.sh
 start=$SECONDS
 
 step "aarch64 toolchain (rustup target, cross gcc, qemu-user)"

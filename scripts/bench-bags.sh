@@ -16,15 +16,13 @@
 # takes about 50 minutes for "1G 8G" on 2 cores; KEEP=1 keeps the bags for another run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/lib/common.sh
 
 SIZES="${SIZES:-1G 8G}"
 OUT="${OUT:-${CARGO_TARGET_DIR:-target}/bench-bags}"
 # Bytes one frame takes in an uncompressed bag: depth 1024 x 768 x 2, labels 1024 x 768,
 # plus camera info, transforms and record headers (measured: about 1.1 kB).
 FRAME_BYTES=2360400
-
-. scripts/lib/step.sh
-. scripts/lib/install.sh
 
 step "GNU time (for the peak RSS)"
 ensure_packages /usr/bin/time:time

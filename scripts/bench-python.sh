@@ -12,8 +12,7 @@
 # FRAMES (default 12) and RUNS (default 5) set the size; about 10 minutes with the build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-. scripts/lib/step.sh
-. scripts/lib/install.sh
+. scripts/lib/common.sh
 
 FRAMES="${FRAMES:-12}"
 RUNS="${RUNS:-5}"

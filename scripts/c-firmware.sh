@@ -8,6 +8,7 @@
 # verdict, semihosting) and that no panic call site comes from sndt-core. Installs what it needs when missing (idempotent; fast when present).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/lib/common.sh
 
 C_DIR=targets/c
 FW_SRC="$C_DIR/firmware"
@@ -16,9 +17,6 @@ LIB="$C_DIR/target/$TARGET/release/libsndt_c.a"
 BUILD="$C_DIR/target/firmware" # gitignored (target/)
 ELF="$BUILD/sndt-c-firmware.elf"
 
-. scripts/lib/step.sh
-. scripts/lib/install.sh
-. scripts/lib/vector.sh
 
 step "C firmware toolchain"
 ensure_rust_target "$TARGET"

@@ -8,17 +8,14 @@
 # cbindgen via cargo install); idempotent.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/lib/common.sh
 
 C_DIR=targets/c
 CBINDGEN_VERSION=0.29.4
 BUILD="$C_DIR/target/cmake"
 
-. scripts/lib/step.sh
-. scripts/lib/install.sh
-. scripts/lib/vector.sh
 # Every build of sndt-c lints it (clippy -D warnings, scripts/lib/lint.sh): the unit tests'
 # build on the host, and the thumbv7em-none-eabihf build of scripts/c-firmware.sh.
-. scripts/lib/lint.sh
 lint_in_builds
 
 step "C toolchain: cmake, a C and C++ compiler, cbindgen $CBINDGEN_VERSION"

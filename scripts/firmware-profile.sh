@@ -13,8 +13,7 @@
 # PROFILE_ADDRESSES=FILE also writes the executions of every instruction address to FILE.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-. scripts/lib/install.sh
-. scripts/lib/vector.sh
+. scripts/lib/common.sh
 
 ELF="${1:-targets/cortex-m4f/target/thumbv7em-none-eabihf/release/sndt-cortex-m4f}"
 if [[ "$ELF" == --frames ]]; then

@@ -16,6 +16,7 @@
 # missing (idempotent; fast when everything is present).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/lib/common.sh
 
 FW_DIR=targets/cortex-m4f
 ELF="$FW_DIR/target/thumbv7em-none-eabihf/release/sndt-cortex-m4f"
@@ -24,12 +25,8 @@ kib_of() { awk -v r="$1" '$1 == r { for (i = 1; i <= NF; i++) if ($i == "LENGTH"
 FLASH_BUDGET=$(($(kib_of FLASH) * 1024))
 RAM_BUDGET=$(($(kib_of RAM) * 1024))
 
-. scripts/lib/step.sh
-. scripts/lib/install.sh
-. scripts/lib/vector.sh
 VECTOR="$VECTOR_DIR/frames.bin"
 # The firmware's build lints it (clippy -D warnings, scripts/lib/lint.sh).
-. scripts/lib/lint.sh
 lint_in_builds
 
 step "firmware toolchain"

@@ -18,6 +18,7 @@
 # exits non-zero on any crash, printing the artifact's path.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/lib/common.sh
 
 TARGETS=(snapshot integrate record_stream png json npy hdf5 mcap)
 # Smoke: new runs per target after the corpus, and a time cap per target (seconds) so a
@@ -39,9 +40,6 @@ FUZZ_RUSTFLAGS="-Cpasses=sancov-module -Cllvm-args=-sanitizer-coverage-level=4 \
 -Cllvm-args=-sanitizer-coverage-inline-8bit-counters -Cllvm-args=-sanitizer-coverage-pc-table \
 -Cllvm-args=-sanitizer-coverage-trace-compares -Cllvm-args=-sanitizer-coverage-stack-depth \
 --cfg fuzzing"
-
-. scripts/lib/step.sh
-. scripts/lib/install.sh
 
 build() {
     # libfuzzer-sys compiles libFuzzer, which is C++.
@@ -93,7 +91,6 @@ summarize() {
 smoke() {
     step "fuzz crate: cargo fmt --check"
     (cd fuzz && cargo fmt --all -- --check)
-    . scripts/lib/lint.sh
     lint_in_builds
     PROFILE=smoke
     BIN="$TARGET_DIR/$TRIPLE/$PROFILE"

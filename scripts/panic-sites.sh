@@ -15,8 +15,8 @@ set -euo pipefail
 
 elf="${1:?usage: panic-sites.sh ELF}"
 # From where it is, not the repository root: ELF is relative to the caller's directory.
-# shellcheck source=scripts/lib/install.sh
-. "$(dirname "$0")/lib/install.sh"
+# shellcheck source=scripts/lib/common.sh
+. "$(dirname "$0")/lib/common.sh"
 ensure_packages llvm-objdump:llvm llvm-addr2line:llvm
 
 # Panic entry points: the functions a failed check calls (names as llvm-objdump -C prints).

@@ -12,9 +12,7 @@
 # build, scripts/lib/lint.sh): the workspace's build step leaves it to this one.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-. scripts/lib/step.sh
-. scripts/lib/install.sh
-. scripts/lib/lint.sh
+. scripts/lib/common.sh
 lint_in_builds
 
 TARGET="${CARGO_TARGET_DIR:-$PWD/target}"

@@ -13,11 +13,10 @@
 #      maps to the same snapshot as the prepared layout.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/lib/common.sh
 
 VENV=target/ros-venv
 WORK=target/ros-check
-. scripts/lib/step.sh
-. scripts/lib/install.sh
 
 step "Python readers/writers (mcap, mcap-ros2-support, rosbags, pypng) in $VENV"
 ensure_ros_venv "$VENV"

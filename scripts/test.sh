@@ -9,11 +9,7 @@
 # idempotent.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-
-# Each step's banner says when it started (seconds since the start), so a slow step shows;
-# the scripts it runs count from the same start.
-. scripts/lib/step.sh
-. scripts/lib/install.sh
+. scripts/lib/common.sh
 
 step "toolchain components and targets"
 rustup component add rustfmt clippy >/dev/null 2>&1 || true
@@ -21,7 +17,6 @@ ensure_rust_target thumbv7em-none-eabihf
 
 # Every build below lints the crates it compiles, as `cargo clippy -- -D warnings` would
 # (scripts/lib/lint.sh): one compilation per crate instead of a check and a build.
-. scripts/lib/lint.sh
 lint_in_builds
 # Builds here start from nothing on CI: incremental compilation only adds work to those.
 export CARGO_INCREMENTAL=0
