@@ -57,17 +57,19 @@ prog="$C_DIR/target/$TARGET/vector_crc"
 aarch64-linux-gnu-gcc -std=c99 -O2 -Wall -Wextra -Werror -pedantic -I"$C_DIR/include" \
     "$C_DIR/examples/vector_crc.c" "$C_DIR/target/$TARGET/release/libsndt_c.a" -lm -o "$prog"
 qemu-aarch64 -L /usr/aarch64-linux-gnu "$prog" "$VECTOR_DIR/frames.bin" | tee -a "$log"
-expected=$(committed_crc expected_crc.txt)
-crc=$(last_hex "$log" '^snapshot crc')
-if [ "$crc" != "$expected" ]; then
-    echo "error: aarch64 snapshot CRC '${crc:-none}' differs from expected_crc.txt ($expected)" >&2
-    exit 1
-fi
-expected_render=$(committed_crc expected_render_crc.txt)
-render=$(last_hex "$log" '^render crc')
-if [ "$render" != "$expected_render" ]; then
-    echo "error: aarch64 render CRC '${render:-none}' differs from expected_render_crc.txt ($expected_render)" >&2
-    exit 1
-fi
+# checked_crc NAME FILE: the last "NAME crc 0x........" vector_crc printed, which must be the
+# CRC committed in FILE.
+checked_crc() {
+    local crc expected
+    crc=$(last_hex "$log" "^$1 crc")
+    expected=$(committed_crc "$2")
+    if [ "$crc" != "$expected" ]; then
+        echo "error: aarch64 $1 CRC '${crc:-none}' differs from $2 ($expected)" >&2
+        return 1
+    fi
+    printf '%s\n' "$crc"
+}
+crc=$(checked_crc snapshot expected_crc.txt)
+render=$(checked_crc render expected_render_crc.txt)
 awk '/^test result:/ { p += $4; f += $6 } END { printf "\naarch64: %d passed, %d failed\n", p, f }' "$log"
 echo "aarch64 (qemu-aarch64): snapshot CRC $crc = expected_crc.txt, render CRC $render = expected_render_crc.txt, spill CRC = expected_spill_crc.txt ($expected_spill, tests/spill_vector.rs); took $((SECONDS - start)) s"
