@@ -11,28 +11,15 @@
 # Installs what it needs when missing (idempotent; fast when everything is present).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/lib/common.sh
 
 TARGET=aarch64-unknown-linux-gnu
-step() { printf '\n==> %s\n' "$*"; }
 start=$SECONDS
 
 step "aarch64 toolchain (rustup target, cross gcc, qemu-user)"
-if ! rustup target list --installed | grep -qx "$TARGET"; then
-    rustup target add "$TARGET"
-fi
-if ! command -v aarch64-linux-gnu-gcc >/dev/null 2>&1 || ! command -v qemu-aarch64 >/dev/null 2>&1 ||
-    ! [ -e /usr/aarch64-linux-gnu/lib/libc.so.6 ]; then
-    export DEBIAN_FRONTEND=noninteractive
-    apt-get update -qq
-    pkgs=(gcc-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user)
-    # The image may ship qemu-utils from backports, which bookworm's qemu packages can
-    # conflict with; if apt would remove anything, pin the bookworm qemu-utils alongside
-    # (as scripts/firmware.sh does) so qemu-img stays installed.
-    if apt-get install -s --no-install-recommends "${pkgs[@]}" | grep -q '^Remv'; then
-        pkgs+=(qemu-utils/bookworm)
-    fi
-    apt-get install -y -qq --no-install-recommends --allow-downgrades "${pkgs[@]}"
-fi
+ensure_rust_target "$TARGET"
+ensure_packages aarch64-linux-gnu-gcc:gcc-aarch64-linux-gnu libc6-dev-arm64-cross \
+    qemu-aarch64:qemu-user
 
 # Cross linker and the emulator as the test runner (-L: where the aarch64 loader and libc are).
 export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc
@@ -56,7 +43,7 @@ if [ -z "$doctests" ] || [ "$doctests" -eq 0 ]; then
     exit 1
 fi
 
-expected_spill=$(tr -d '[:space:]' <targets/cortex-m4f/vector/expected_spill_crc.txt)
+expected_spill=$(committed_crc expected_spill_crc.txt)
 if ! grep -q '^test spill_run_matches_the_committed_crc \.\.\. ok$' "$log"; then
     echo "error: the spill run's test (core/tests/spill_vector.rs) did not pass on $TARGET" >&2
     exit 1
@@ -69,19 +56,20 @@ C_DIR=targets/c
 prog="$C_DIR/target/$TARGET/vector_crc"
 aarch64-linux-gnu-gcc -std=c99 -O2 -Wall -Wextra -Werror -pedantic -I"$C_DIR/include" \
     "$C_DIR/examples/vector_crc.c" "$C_DIR/target/$TARGET/release/libsndt_c.a" -lm -o "$prog"
-qemu-aarch64 -L /usr/aarch64-linux-gnu "$prog" targets/cortex-m4f/vector/frames.bin | tee -a "$log"
-crc_of() { grep -oE "^$1 crc 0x[0-9a-f]{8}" "$log" | awk '{ print $3 }' | tail -n 1; }
-expected=$(tr -d '[:space:]' <targets/cortex-m4f/vector/expected_crc.txt)
-crc=$(crc_of snapshot)
-if [ "$crc" != "$expected" ]; then
-    echo "error: aarch64 snapshot CRC '${crc:-none}' differs from expected_crc.txt ($expected)" >&2
-    exit 1
-fi
-expected_render=$(tr -d '[:space:]' <targets/cortex-m4f/vector/expected_render_crc.txt)
-render=$(crc_of render)
-if [ "$render" != "$expected_render" ]; then
-    echo "error: aarch64 render CRC '${render:-none}' differs from expected_render_crc.txt ($expected_render)" >&2
-    exit 1
-fi
+qemu-aarch64 -L /usr/aarch64-linux-gnu "$prog" "$VECTOR_DIR/frames.bin" | tee -a "$log"
+# checked_crc NAME FILE: the last "NAME crc 0x........" vector_crc printed, which must be the
+# CRC committed in FILE.
+checked_crc() {
+    local crc expected
+    crc=$(last_hex "$log" "^$1 crc")
+    expected=$(committed_crc "$2")
+    if [ "$crc" != "$expected" ]; then
+        echo "error: aarch64 $1 CRC '${crc:-none}' differs from $2 ($expected)" >&2
+        return 1
+    fi
+    printf '%s\n' "$crc"
+}
+crc=$(checked_crc snapshot expected_crc.txt)
+render=$(checked_crc render expected_render_crc.txt)
 awk '/^test result:/ { p += $4; f += $6 } END { printf "\naarch64: %d passed, %d failed\n", p, f }' "$log"
 echo "aarch64 (qemu-aarch64): snapshot CRC $crc = expected_crc.txt, render CRC $render = expected_render_crc.txt, spill CRC = expected_spill_crc.txt ($expected_spill, tests/spill_vector.rs); took $((SECONDS - start)) s"

@@ -16,6 +16,7 @@
 # takes about 50 minutes for "1G 8G" on 2 cores; KEEP=1 keeps the bags for another run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/lib/common.sh
 
 SIZES="${SIZES:-1G 8G}"
 OUT="${OUT:-${CARGO_TARGET_DIR:-target}/bench-bags}"
@@ -23,14 +24,8 @@ OUT="${OUT:-${CARGO_TARGET_DIR:-target}/bench-bags}"
 # plus camera info, transforms and record headers (measured: about 1.1 kB).
 FRAME_BYTES=2360400
 
-step() { printf '\n==> %s\n' "$*"; }
-
-if [ ! -x /usr/bin/time ]; then
-    step "GNU time (for the peak RSS)"
-    export DEBIAN_FRONTEND=noninteractive
-    apt-get update -qq
-    apt-get install -y -qq --no-install-recommends time
-fi
+step "GNU time (for the peak RSS)"
+ensure_packages /usr/bin/time:time
 
 step "release build"
 cargo build --release -q -p sndt-host --bin sndt

@@ -21,6 +21,7 @@
 # run to run at 5 cm, so one run says little there.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/lib/common.sh
 
 FRAMES=12
 CELLS=(0.05 0.10 0.20)
@@ -38,10 +39,6 @@ HARNESS="$WORK/octomap_bench"
 # Before anything runs: the CPUs (nproc would count OMP_NUM_THREADS) and the load.
 CPUS=$(env -u OMP_NUM_THREADS -u OMP_THREAD_LIMIT nproc)
 LOAD=$(cut -d' ' -f1 /proc/loadavg)
-
-step() { printf '\n==> %s\n' "$*"; }
-
-. scripts/lib/install.sh
 
 step "OctoMap, g++ and pkg-config"
 ensure_octomap

@@ -12,19 +12,15 @@
 # FRAMES (default 12) and RUNS (default 5) set the size; about 10 minutes with the build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-. scripts/lib/install.sh
+. scripts/lib/common.sh
 
 FRAMES="${FRAMES:-12}"
 RUNS="${RUNS:-5}"
 TARGET="${CARGO_TARGET_DIR:-$PWD/target}"
 VENV="$TARGET/python-bench-venv"
-step() { printf '\n==> %s\n' "$*"; }
 
 step "venv with maturin, numpy, pyoctomap ($VENV)"
-if ! "$VENV/bin/python" -c 'import numpy, pyoctomap' 2>/dev/null || [ ! -x "$VENV/bin/maturin" ]; then
-    python3 -m venv "$VENV" 2>/dev/null || { apt_install python3-venv && python3 -m venv "$VENV"; }
-    "$VENV/bin/pip" install -q 'maturin>=1.9.4,<2' 'numpy>=1.21,<3' 'pyoctomap==1.2.*'
-fi
+ensure_python_bench_venv "$VENV"
 export PATH="$VENV/bin:$PATH"
 
 step "pip install ./python (release)"

@@ -8,40 +8,20 @@
 # verdict, semihosting) and that no panic call site comes from sndt-core. Installs what it needs when missing (idempotent; fast when present).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/lib/common.sh
 
 C_DIR=targets/c
 FW_SRC="$C_DIR/firmware"
-VECTOR_DIR=targets/cortex-m4f/vector
 TARGET=thumbv7em-none-eabihf
 LIB="$C_DIR/target/$TARGET/release/libsndt_c.a"
 BUILD="$C_DIR/target/firmware" # gitignored (target/)
 ELF="$BUILD/sndt-c-firmware.elf"
 
-step() { printf '\n==> %s\n' "$*"; }
 
 step "C firmware toolchain"
-if ! rustup target list --installed | grep -qx "$TARGET"; then
-    rustup target add "$TARGET"
-fi
-# picolibc.specs is found through the compiler's search path (-print-file-name prints the
-# bare name when it is missing).
-have_picolibc() {
-    command -v arm-none-eabi-gcc >/dev/null 2>&1 &&
-        [ -f "$(arm-none-eabi-gcc -print-file-name=picolibc.specs)" ]
-}
-if ! have_picolibc; then
-    export DEBIAN_FRONTEND=noninteractive
-    apt-get update -qq
-    apt-get install -y -qq --no-install-recommends gcc-arm-none-eabi picolibc-arm-none-eabi
-fi
-if ! command -v qemu-system-arm >/dev/null 2>&1; then
-    # As scripts/firmware.sh: the image ships qemu-utils from backports, which conflicts with
-    # bookworm's qemu-system-arm; installing the bookworm qemu-utils alongside keeps qemu-img.
-    export DEBIAN_FRONTEND=noninteractive
-    apt-get update -qq
-    apt-get install -y -qq --no-install-recommends --allow-downgrades \
-        qemu-system-arm qemu-utils/bookworm
-fi
+ensure_rust_target "$TARGET"
+ensure_packages arm-none-eabi-gcc:gcc-arm-none-eabi picolibc-arm-none-eabi \
+    qemu-system-arm:qemu-system-arm
 
 step "build libsndt_c.a (release, $TARGET)"
 # Its own workspace and lockfile; its own target dir whatever CARGO_TARGET_DIR says, so $LIB
@@ -50,17 +30,8 @@ step "build libsndt_c.a (release, $TARGET)"
 
 step "build C firmware"
 # The expected CRCs, compiled in: the firmware's exit status is its own verdict.
-crc_of() {
-    local v
-    v=$(tr -d '[:space:]' <"$VECTOR_DIR/$1")
-    if ! [[ $v =~ ^0x[0-9a-fA-F]{8}$ ]]; then
-        echo "error: $VECTOR_DIR/$1 is not 0x........" >&2
-        return 1
-    fi
-    printf '%s\n' "${v,,}"
-}
-expected_crc=$(crc_of expected_crc.txt)
-expected_render_crc=$(crc_of expected_render_crc.txt)
+expected_crc=$(committed_crc expected_crc.txt)
+expected_render_crc=$(committed_crc expected_render_crc.txt)
 mkdir -p "$BUILD"
 # Cortex-M4F, hard float (the ABI of libsndt_c.a); picolibc with semihosting as the OS layer,
 # crt0-semihost (reports HardFaults and exits instead of hanging).
@@ -105,25 +76,19 @@ if ((flash > 1024 * 1024 || ram + stack > 512 * 1024)); then
 fi
 
 step "run C firmware under QEMU (mps2-an386, Cortex-M4F)"
-# -icount shift=0: one instruction per virtual nanosecond, so SysTick (25 MHz) counts one
-# tick per 40 instructions. The exit status is the firmware's (semihosting) or timeout's 124.
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT
 status=0
-timeout 60 qemu-system-arm -cpu cortex-m4 -machine mps2-an386 -nographic -monitor none \
-    -serial none -semihosting-config enable=on,target=native -icount shift=0 \
-    -kernel "$ELF" >"$log" 2>&1 || status=$?
+run_mps2_an386 60 "$ELF" none >"$log" 2>&1 || status=$?
 cat "$log"
 
 step "check"
-# The last "NAME 0x........" line of the firmware's output.
-crc_line() { grep -oE "^$1 0x[0-9a-f]{8}" "$log" | awk '{ print $NF }' | tail -n 1 || true; }
-snapshot=$(crc_line 'snapshot crc')
-render=$(crc_line 'render crc')
+snapshot=$(last_hex "$log" '^snapshot crc')
+render=$(last_hex "$log" '^render crc')
 printf 'snapshot crc: C firmware %s, expected_crc.txt %s\n' "${snapshot:-none}" "$expected_crc"
 printf 'render crc:   C firmware %s, expected_render_crc.txt %s\n' "${render:-none}" "$expected_render_crc"
-peak=$(grep -oE 'peak stack [0-9]+' "$log" | awk '{ print $3 }' | tail -n 1 || true)
-ticks=$(grep -oE 'systick per frame [0-9]+' "$log" | awk '{ print $4 }' | tail -n 1 || true)
+peak=$(last_number "$log" 'peak stack')
+ticks=$(last_number "$log" 'systick per frame')
 if [ -n "$peak" ]; then
     printf 'peak stack: %d bytes (measured, painted); static RAM + peak stack %d bytes of 512 KiB\n' \
         "$peak" $((ram + peak))

@@ -8,30 +8,20 @@
 # cbindgen via cargo install); idempotent.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/lib/common.sh
 
 C_DIR=targets/c
-VECTOR_DIR=targets/cortex-m4f/vector
 CBINDGEN_VERSION=0.29.4
 BUILD="$C_DIR/target/cmake"
 
-step() { printf '\n==> %s\n' "$*"; }
 # Every build of sndt-c lints it (clippy -D warnings, scripts/lib/lint.sh): the unit tests'
 # build on the host, and the thumbv7em-none-eabihf build of scripts/c-firmware.sh.
-. scripts/lib/lint.sh
 lint_in_builds
 
 step "C toolchain: cmake, a C and C++ compiler, cbindgen $CBINDGEN_VERSION"
-if ! command -v cmake >/dev/null 2>&1 || ! command -v g++ >/dev/null 2>&1; then
-    export DEBIAN_FRONTEND=noninteractive
-    apt-get update -qq
-    apt-get install -y -qq --no-install-recommends cmake make gcc g++
-fi
-if ! rustup target list --installed | grep -qx thumbv7em-none-eabihf; then
-    rustup target add thumbv7em-none-eabihf
-fi
-if ! cbindgen --version 2>/dev/null | grep -qx "cbindgen $CBINDGEN_VERSION"; then
-    without_lints cargo install cbindgen --version "$CBINDGEN_VERSION" --locked
-fi
+ensure_packages cmake:cmake make:make cc:gcc g++:g++
+ensure_rust_target thumbv7em-none-eabihf
+ensure_cargo_tool cbindgen "$CBINDGEN_VERSION"
 
 step "sndt-c: fmt, unit tests (built and linted)"
 (cd "$C_DIR" && cargo fmt --check && cargo test --locked --quiet)
@@ -61,14 +51,13 @@ cc -std=c99 -Wall -Wextra -Werror -pedantic -I"$C_DIR/include" -c "$BUILD/first_
 echo "docs/C_API.md example: compiles"
 
 step "CRCs from C and C++ against the Rust test vector's"
-want=$(tr -d '[:space:]' <"$VECTOR_DIR/expected_crc.txt")
-want_render=$(tr -d '[:space:]' <"$VECTOR_DIR/expected_render_crc.txt")
+want=$(committed_crc expected_crc.txt)
+want_render=$(committed_crc expected_render_crc.txt)
 c_out=$("$BUILD/vector_crc" "$VECTOR_DIR/frames.bin")
 cpp_out=$("$BUILD/vector_crc_cpp" "$VECTOR_DIR/frames.bin")
-crc_of() { grep -oE "^$1 crc 0x[0-9a-f]{8}" | awk '{ print $3 }'; }
-c_crc=$(crc_of snapshot <<<"$c_out")
-c_render=$(crc_of render <<<"$c_out")
-cpp_crc=$(crc_of snapshot <<<"$cpp_out")
+c_crc=$(last_hex - '^snapshot crc' <<<"$c_out")
+c_render=$(last_hex - '^render crc' <<<"$c_out")
+cpp_crc=$(last_hex - '^snapshot crc' <<<"$cpp_out")
 printf 'snapshot CRC: C %s, C++ %s, expected_crc.txt %s\n' "${c_crc:-none}" "${cpp_crc:-none}" "$want"
 printf 'render CRC:   C %s, expected_render_crc.txt %s\n' "${c_render:-none}" "$want_render"
 if [ "$c_crc" != "$want" ] || [ "$cpp_crc" != "$want" ] || [ "$c_render" != "$want_render" ]; then

@@ -13,6 +13,7 @@
 # PROFILE_ADDRESSES=FILE also writes the executions of every instruction address to FILE.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/lib/common.sh
 
 ELF="${1:-targets/cortex-m4f/target/thumbv7em-none-eabihf/release/sndt-cortex-m4f}"
 if [[ "$ELF" == --frames ]]; then
@@ -24,16 +25,12 @@ if [[ ! -f "$ELF" ]]; then
     echo "error: $ELF not found; build it with bash scripts/firmware.sh" >&2
     exit 1
 fi
-for tool in qemu-system-arm llvm-addr2line python3; do
-    command -v "$tool" >/dev/null || { echo "error: $tool not found (bash scripts/firmware.sh and panic-sites.sh install QEMU and llvm)" >&2; exit 1; }
-done
+ensure_packages qemu-system-arm:qemu-system-arm llvm-addr2line:llvm python3:python3
 
 dir="$(mktemp -d)"
 trap 'rm -rf "$dir"' EXIT
 mkfifo "$dir/log"
 python3 scripts/profile/tb_profile.py "$dir/log" "$ELF" &
 reader=$!
-timeout 600 qemu-system-arm -cpu cortex-m4 -machine mps2-an386 -nographic -monitor none \
-    -serial none -semihosting-config enable=on,target=native -icount shift=0 -kernel "$ELF" \
-    -d in_asm,exec,nochain -D "$dir/log" >/dev/null
+run_mps2_an386 600 "$ELF" none -d in_asm,exec,nochain -D "$dir/log" >/dev/null
 wait "$reader"

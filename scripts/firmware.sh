@@ -16,39 +16,23 @@
 # missing (idempotent; fast when everything is present).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/lib/common.sh
 
 FW_DIR=targets/cortex-m4f
 ELF="$FW_DIR/target/thumbv7em-none-eabihf/release/sndt-cortex-m4f"
-VECTOR="$FW_DIR/vector/frames.bin"
 # The budgets are memory.x's FLASH and RAM lengths (in K).
 kib_of() { awk -v r="$1" '$1 == r { for (i = 1; i <= NF; i++) if ($i == "LENGTH") { v = $(i + 2); sub(/[Kk],?$/, "", v); print v } }' "$FW_DIR/memory.x"; }
 FLASH_BUDGET=$(($(kib_of FLASH) * 1024))
 RAM_BUDGET=$(($(kib_of RAM) * 1024))
 
-step() { printf '\n==> %s\n' "$*"; }
+VECTOR="$VECTOR_DIR/frames.bin"
 # The firmware's build lints it (clippy -D warnings, scripts/lib/lint.sh).
-. scripts/lib/lint.sh
 lint_in_builds
 
 step "firmware toolchain"
-if ! rustup target list --installed | grep -qx thumbv7em-none-eabihf; then
-    rustup target add thumbv7em-none-eabihf
-fi
-if ! command -v qemu-system-arm >/dev/null 2>&1; then
-    # The image ships qemu-utils from backports, which conflicts with bookworm's
-    # qemu-system-arm: installing the bookworm qemu-utils in the same command keeps qemu-img.
-    export DEBIAN_FRONTEND=noninteractive
-    apt-get update -qq
-    apt-get install -y -qq --no-install-recommends --allow-downgrades \
-        qemu-system-arm qemu-utils/bookworm
-fi
-if ! command -v defmt-print >/dev/null 2>&1; then
-    without_lints cargo install defmt-print --locked
-fi
-if ! command -v size >/dev/null 2>&1; then
-    echo "error: 'size' (binutils) not found" >&2
-    exit 1
-fi
+ensure_rust_target thumbv7em-none-eabihf
+ensure_packages qemu-system-arm:qemu-system-arm size:binutils
+ensure_cargo_tool defmt-print
 
 step "build and lint firmware (release, thumbv7em-none-eabihf)"
 # Its own workspace and .cargo/config.toml (target, runner, DEFMT_LOG): build from its dir.
@@ -74,17 +58,13 @@ step "panic call sites: none may come from sndt-core"
 bash scripts/panic-sites.sh "$ELF"
 
 step "run firmware under QEMU (mps2-an386, Cortex-M4F)"
-# -icount shift=0: one instruction per virtual nanosecond, so the firmware's SysTick
-# (25 MHz) counts exactly one tick per 40 instructions.
 # UART0 (the spill run's record stream) goes to a file, byte for byte.
 # pipefail: the status is QEMU's, i.e. the firmware's semihosting exit code (or timeout's 124).
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 log="$tmp/firmware.log"
 uart="$tmp/uart.bin"
-timeout 120 qemu-system-arm -cpu cortex-m4 -machine mps2-an386 -nographic -monitor none \
-    -serial "file:$uart" -semihosting-config enable=on,target=native -icount shift=0 \
-    -kernel "$ELF" | defmt-print -e "$ELF" | tee "$log"
+run_mps2_an386 120 "$ELF" "file:$uart" | defmt-print -e "$ELF" | tee "$log"
 
 step "cross-architecture CRCs: Cortex-M4F firmware vs host (x86-64) vs expected_*crc.txt"
 host_log="$tmp/host.log"
@@ -97,9 +77,9 @@ SNDT="${CARGO_TARGET_DIR:-target}/debug/sndt"
 # firmware's output and the host's line "HOST_LINE 0x..." must both equal the committed file.
 check_crc() {
     local fw host expected
-    fw=$(grep -oE "$2 0x[0-9a-f]{8}" "$log" | awk '{ print $NF }' | tail -n 1 || true)
-    host=$(grep -E "^$3 0x" "$host_log" | awk '{ print $NF }' | tail -n 1 || true)
-    expected=$(tr -d '[:space:]' <"$FW_DIR/vector/$4")
+    fw=$(last_hex "$log" "$2")
+    host=$(last_hex "$host_log" "^$3")
+    expected=$(committed_crc "$4")
     printf '%s CRC: Cortex-M4F (QEMU) %s, host (%s) %s, %s %s\n' \
         "$1" "${fw:-none}" "$(uname -m)" "${host:-none}" "$4" "$expected"
     if [ -z "$fw" ] || [ "$fw" != "$host" ] || [ "$host" != "$expected" ]; then
@@ -116,9 +96,7 @@ stream_log="$tmp/stream.log"
 "$SNDT" testvector --spill "$VECTOR" | tee "$spill_log"
 echo
 "$SNDT" testvector --merge-stream "$uart" | tee "$stream_log"
-# last_hex FILE PATTERN: the 0x........ after PATTERN on the last line that has it.
-last_hex() { grep -oE "$2 0x[0-9a-f]{8}" "$1" | awk '{ print $NF }' | tail -n 1 || true; }
-fw_spill_bytes=$(grep -oE 'spill stream bytes [0-9]+' "$log" | awk '{ print $4 }' | tail -n 1 || true)
+fw_spill_bytes=$(last_number "$log" 'spill stream bytes')
 uart_bytes=$(wc -c <"$uart")
 fw_device=$(last_hex "$log" 'device crc')
 stream_device=$(last_hex "$stream_log" 'device crc')
@@ -127,7 +105,7 @@ stream_crc=$(last_hex "$stream_log" 'stream crc')
 host_stream_crc=$(last_hex "$spill_log" 'stream crc')
 merged=$(last_hex "$stream_log" 'spill crc')
 own=$(last_hex "$spill_log" 'spill crc')
-expected_spill=$(tr -d '[:space:]' <"$FW_DIR/vector/expected_spill_crc.txt")
+expected_spill=$(committed_crc expected_spill_crc.txt)
 printf '\nUART stream: %d bytes in %s (the firmware sent %s), stream crc %s (host run writes %s)\n' \
     "$uart_bytes" "$(basename "$uart")" "${fw_spill_bytes:-none}" "${stream_crc:-none}" "${host_stream_crc:-none}"
 printf 'device map CRC: Cortex-M4F (QEMU) %s, stream end frame %s, host run %s\n' \
@@ -148,12 +126,12 @@ if [ -z "$merged" ] || [ "$merged" != "$own" ] || [ "$own" != "$expected_spill" 
 fi
 
 step "memory report"
-peak=$(grep -oE 'peak stack [0-9]+' "$log" | awk '{ print $3 }' | tail -n 1 || true)
+peak=$(last_number "$log" 'peak stack')
 if [ -z "$peak" ]; then
     echo "error: the firmware did not report its peak stack" >&2
     exit 1
 fi
-ticks=$(grep -oE 'systick per frame [0-9]+' "$log" | awk '{ print $4 }' | tail -n 1 || true)
+ticks=$(last_number "$log" 'systick per frame')
 printf 'flash:             %8d bytes (%d KiB of %d KiB)\n' "$flash" $(((flash + 1023) / 1024)) $((FLASH_BUDGET / 1024))
 printf 'static RAM:        %8d bytes\n' "$ram"
 printf 'peak stack:        %8d bytes (measured, paint-stack)\n' "$peak"

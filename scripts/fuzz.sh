@@ -18,6 +18,7 @@
 # exits non-zero on any crash, printing the artifact's path.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/lib/common.sh
 
 TARGETS=(snapshot integrate record_stream png json npy hdf5 mcap)
 # Smoke: new runs per target after the corpus, and a time cap per target (seconds) so a
@@ -40,17 +41,9 @@ FUZZ_RUSTFLAGS="-Cpasses=sancov-module -Cllvm-args=-sanitizer-coverage-level=4 \
 -Cllvm-args=-sanitizer-coverage-trace-compares -Cllvm-args=-sanitizer-coverage-stack-depth \
 --cfg fuzzing"
 
-step() { printf '\n==> %s\n' "$*"; }
-
-install_deps() {
-    if ! command -v c++ >/dev/null 2>&1; then
-        step "installing a C++ compiler (libfuzzer-sys builds libFuzzer)"
-        apt-get update -qq && apt-get install -y -qq g++
-    fi
-}
-
 build() {
-    install_deps
+    # libfuzzer-sys compiles libFuzzer, which is C++.
+    ensure_packages c++:g++
     step "building the fuzz targets ($PROFILE profile, debug assertions, sanitizer coverage)"
     (cd fuzz && RUSTFLAGS="$FUZZ_RUSTFLAGS" cargo build --profile "$PROFILE" --locked \
         --target "$TRIPLE" --target-dir "$TARGET_DIR" --bins)
@@ -62,7 +55,8 @@ run() {
     local target=$1
     shift
     local found="$TARGET_DIR/found/$target" artifacts="$TARGET_DIR/artifacts/$target"
-    local log="$TARGET_DIR/logs/$target-$(date +%Y%m%d-%H%M%S)-$$.log"
+    local log
+    log="$TARGET_DIR/logs/$target-$(date +%Y%m%d-%H%M%S)-$$.log"
     mkdir -p "$found" "$artifacts" "$(dirname "$log")" "fuzz/corpus/$target"
     local start=$SECONDS rc=0
     "$BIN/$target" -artifact_prefix="$artifacts/" -print_final_stats=1 -timeout=25 \
@@ -97,7 +91,6 @@ summarize() {
 smoke() {
     step "fuzz crate: cargo fmt --check"
     (cd fuzz && cargo fmt --all -- --check)
-    . scripts/lib/lint.sh
     lint_in_builds
     PROFILE=smoke
     BIN="$TARGET_DIR/$TRIPLE/$PROFILE"
@@ -133,7 +126,7 @@ seeds() {
     for t in "${TARGETS[@]}"; do
         mkdir -p "fuzz/corpus/$t" "$raw/$t"
         "$BIN/$t" -merge=1 "fuzz/corpus/$t" "$raw/$t" >"$tmp/$t.log" 2>&1
-        echo "corpus $t: $(ls "fuzz/corpus/$t" | wc -l) files, $(du -sk "fuzz/corpus/$t" | cut -f1) KiB"
+        echo "corpus $t: $(find "fuzz/corpus/$t" -type f | wc -l) files, $(du -sk "fuzz/corpus/$t" | cut -f1) KiB"
     done
     rm -rf "$tmp"
 }

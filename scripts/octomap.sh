@@ -11,14 +11,13 @@
 # tree byte for byte. Installs what it needs when missing; idempotent.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/lib/common.sh
 
 TARGET="${CARGO_TARGET_DIR:-target}"
 WORK=target/octomap-check
 VENV=target/ros-venv
 CELL=0.1
 CHECK="$TARGET/octomap/check_octomap"
-step() { printf '\n==> %s\n' "$*"; }
-. scripts/lib/install.sh
 
 step "liboctomap-dev, g++ and pkg-config"
 ensure_octomap

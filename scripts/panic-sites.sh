@@ -14,11 +14,10 @@
 set -euo pipefail
 
 elf="${1:?usage: panic-sites.sh ELF}"
-if ! command -v llvm-objdump >/dev/null 2>&1 || ! command -v llvm-addr2line >/dev/null 2>&1; then
-    export DEBIAN_FRONTEND=noninteractive
-    apt-get update -qq
-    apt-get install -y -qq --no-install-recommends llvm >/dev/null
-fi
+# From where it is, not the repository root: ELF is relative to the caller's directory.
+# shellcheck source=scripts/lib/common.sh
+. "$(dirname "$0")/lib/common.sh"
+ensure_packages llvm-objdump:llvm llvm-addr2line:llvm
 
 # Panic entry points: the functions a failed check calls (names as llvm-objdump -C prints).
 panic_fn='panic|_fail(ed)?$|assert_failed'

@@ -12,11 +12,9 @@
 # build, scripts/lib/lint.sh): the workspace's build step leaves it to this one.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-. scripts/lib/install.sh
-. scripts/lib/lint.sh
+. scripts/lib/common.sh
 lint_in_builds
 
-step() { printf '\n==> %s\n' "$*"; }
 TARGET="${CARGO_TARGET_DIR:-$PWD/target}"
 VENV="$TARGET/python-venv"
 

@@ -13,13 +13,12 @@
 #      maps to the same snapshot as the prepared layout.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/lib/common.sh
 
 VENV=target/ros-venv
 WORK=target/ros-check
-step() { printf '\n==> %s\n' "$*"; }
 
 step "Python readers/writers (mcap, mcap-ros2-support, rosbags, pypng) in $VENV"
-. scripts/lib/install.sh
 ensure_ros_venv "$VENV"
 PY="$VENV/bin/python"
 

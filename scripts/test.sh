@@ -9,19 +9,14 @@
 # idempotent.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-
-# Each step's banner says when it started (seconds since the start), so a slow step shows.
-step() { printf '\n==> %s (at %d s)\n' "$*" "$SECONDS"; }
+. scripts/lib/common.sh
 
 step "toolchain components and targets"
 rustup component add rustfmt clippy >/dev/null 2>&1 || true
-if ! rustup target list --installed | grep -qx thumbv7em-none-eabihf; then
-    rustup target add thumbv7em-none-eabihf
-fi
+ensure_rust_target thumbv7em-none-eabihf
 
 # Every build below lints the crates it compiles, as `cargo clippy -- -D warnings` would
 # (scripts/lib/lint.sh): one compilation per crate instead of a check and a build.
-. scripts/lib/lint.sh
 lint_in_builds
 # Builds here start from nothing on CI: incremental compilation only adds work to those.
 export CARGO_INCREMENTAL=0
@@ -61,6 +56,7 @@ cargo fmt --all -- --check
 # The Python venvs of the ROS 2, OctoMap and Python steps are downloads, not CPU: they fill
 # while the workspace compiles.
 step "in the background: the Python venvs (target/ros-venv, target/python-venv)"
+# shellcheck disable=SC2016 # expanded by the inner shell
 background venvs bash -c '. scripts/lib/install.sh && ensure_ros_venv target/ros-venv &&
     ensure_python_venv "${CARGO_TARGET_DIR:-$PWD/target}/python-venv"'
 
@@ -77,9 +73,7 @@ await venvs
 # libFuzzer) on the 2 cores. Its C++ compiler is installed first, in the foreground, as
 # apt-get takes one install at a time.
 step "in the background: fuzzing smoke (fmt, a linted instrumented build, every target)"
-if ! command -v c++ >/dev/null 2>&1; then
-    (. scripts/lib/install.sh && apt_install g++)
-fi
+ensure_packages c++:g++
 background fuzz bash scripts/fuzz.sh --smoke
 
 step "sndt-core builds and lints for thumbv7em-none-eabihf (no_std, no alloc)"

@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # Clippy's lints as part of the builds, so that each crate is compiled once. Source it
 # (`. scripts/lib/lint.sh`) and call `lint_in_builds`.
 #

@@ -12,8 +12,7 @@ import sys
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
-FIELDS = [("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("rgb", 12, 7), ("confidence", 16, 7),
-          ("occupancy", 20, 7), ("class", 24, 2)]
+from common import MAP_CLOUD_FIELDS, fail
 
 
 def read_ply(path):
@@ -22,11 +21,6 @@ def read_ply(path):
     header = data[:end].decode()
     n = int(header.split("element vertex ")[1].split()[0])
     return [struct.unpack_from("<3f3B", data, end + 15 * i) for i in range(n)]
-
-
-def fail(msg):
-    print("FAIL:", msg)
-    sys.exit(1)
 
 
 def main(bag, ply, snapshots):
@@ -47,7 +41,7 @@ def main(bag, ply, snapshots):
     if ("world", "sndt_map") not in statics:
         fail(f"/tf_static has {statics}")
     cloud, vertices = clouds[-1], read_ply(ply)
-    if [(x.name, x.offset, x.datatype) for x in cloud.fields] != FIELDS:
+    if [(x.name, x.offset, x.datatype) for x in cloud.fields] != MAP_CLOUD_FIELDS:
         fail(f"fields {[(x.name, x.offset, x.datatype) for x in cloud.fields]}")
     if cloud.width != len(vertices) or cloud.point_step != 28 or len(cloud.data) != 28 * cloud.width:
         fail(f"{cloud.width} points, {len(vertices)} PLY vertices")

@@ -25,18 +25,13 @@ from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from ruamel.yaml import YAML
 
+from common import MAP_CLOUD_FIELDS, fail
+
 STORE = get_typestore(Stores.ROS2_HUMBLE)
 IMAGE = "sensor_msgs/msg/Image"
 CLOUD = "sensor_msgs/msg/PointCloud2"
 MARKERS = "visualization_msgs/msg/MarkerArray"
 OCTOMAP = "octomap_msgs/msg/Octomap"
-FIELDS = [("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("rgb", 12, 7), ("confidence", 16, 7),
-          ("occupancy", 20, 7), ("class", 24, 2)]
-
-
-def fail(msg):
-    print("FAIL:", msg)
-    sys.exit(1)
 
 
 def check_mcap_header(path):
@@ -142,7 +137,7 @@ def check_map(bag, msgs, n):
         fail(f"{bag}: {len(clouds)} clouds and {len(markers)} marker arrays, expected {n}")
     for cloud, array in zip(clouds, markers):
         fields = [(f.name, f.offset, f.datatype) for f in cloud.fields]
-        if fields != FIELDS or cloud.point_step != 28 or len(cloud.data) != 28 * cloud.width:
+        if fields != MAP_CLOUD_FIELDS or cloud.point_step != 28 or len(cloud.data) != 28 * cloud.width:
             fail(f"{bag}: cloud of {cloud.width} points, fields {fields}, {len(cloud.data)} bytes")
         if cloud.header.frame_id != "sndt_map" or cloud.height != 1:
             fail(f"{bag}: cloud in {cloud.header.frame_id}, height {cloud.height}")

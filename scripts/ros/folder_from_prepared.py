@@ -21,15 +21,11 @@ from rosbags.typesys import Stores, get_typestore
 from ruamel.yaml import YAML
 
 from bag_from_prepared import CAMERA_INFO_TYPE, IMAGE_TYPE, TF_TYPE, TOPICS, messages
+from common import fail
 
 PARTS = 3
 STORE = get_typestore(Stores.ROS2_HUMBLE)
 T = STORE.types
-
-
-def fail(msg):
-    print("FAIL:", msg)
-    sys.exit(1)
 
 
 def header(d):
