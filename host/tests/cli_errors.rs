@@ -115,12 +115,10 @@ fn temp_dir(name: &str) -> PathBuf {
     dir
 }
 
-/// A small prepared layout (64x48 synthetic frames with labels, no predictions):
-/// `scenes` scenes of `frames` frames each, in split `test`.
-fn prepared(name: &str, scenes: usize, frames: usize) -> PathBuf {
+/// A small synthetic split: `scenes` scenes of `frames` 64x48 frames each, with labels and
+/// without predictions.
+fn small_split(scenes: usize, frames: usize) -> sndt_host::dataset::synthetic::Synthetic {
     use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
-    use sndt_host::dataset::Dataset;
-    let root = temp_dir(name).join("data");
     let camera = sndt_core::Pinhole {
         fx: 40.0,
         fy: 40.0,
@@ -129,14 +127,21 @@ fn prepared(name: &str, scenes: usize, frames: usize) -> PathBuf {
         width: 64,
         height: 48,
     };
-    let split = Synthetic::new(SynthOptions {
+    Synthetic::new(SynthOptions {
         scenes,
         frames,
         camera,
         predictions: false,
         ..SynthOptions::default()
     })
-    .unwrap();
+    .unwrap()
+}
+
+/// A small prepared layout ([`small_split`]) in split `test`.
+fn prepared(name: &str, scenes: usize, frames: usize) -> PathBuf {
+    use sndt_host::dataset::Dataset;
+    let root = temp_dir(name).join("data");
+    let split = small_split(scenes, frames);
     for id in split.frames() {
         let frame = split.load(id).unwrap();
         sndt_host::dataset::prepared::write_frame(&root, "test", &frame).unwrap();
@@ -448,29 +453,13 @@ fn removed_and_renamed_options_are_refused() {
     }
 }
 
-/// A ROS 2 bag of a small synthetic trajectory (64x48 frames, labels, no predictions):
-/// `frames` frames, posed in frame `world`.
+/// A ROS 2 bag of one small synthetic trajectory ([`small_split`]) of `frames` frames,
+/// posed in frame `world`.
 fn bag(name: &str, frames: usize) -> PathBuf {
-    use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
     use sndt_host::dataset::Dataset;
     use sndt_host::output::ros::write::{write_trajectory_compressed, ChunkCompression};
     let file = temp_dir(name).join("robot.mcap");
-    let camera = sndt_core::Pinhole {
-        fx: 40.0,
-        fy: 40.0,
-        cx: 32.0,
-        cy: 24.0,
-        width: 64,
-        height: 48,
-    };
-    let split = Synthetic::new(SynthOptions {
-        scenes: 1,
-        frames,
-        camera,
-        predictions: false,
-        ..SynthOptions::default()
-    })
-    .unwrap();
+    let split = small_split(1, frames);
     let loaded = split.frames().iter().map(|id| split.load(id));
     write_trajectory_compressed(&file, loaded, ChunkCompression::None).unwrap();
     file
