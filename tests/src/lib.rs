@@ -1,6 +1,8 @@
 //! Shared helpers for the integration tests: snapshot helpers, report accounting, an
 //! exact (f64) reference for voxel traversal, and small scenes.
 
+use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
+
 use sndt_core::{
     Config, DepthImage, DepthKind, FrameReport, Isometry3, LabelImage, LabeledPoint, Labels, Map,
     Pinhole, Point3, SnapshotHeader, VoxelKey,
@@ -217,4 +219,29 @@ pub fn lp(x: f32, y: f32, z: f32, class: u8) -> LabeledPoint {
 /// World to sensor frame.
 pub fn to_sensor(pose: &Isometry3<f32>, world: &[f32; 3]) -> Point3<f32> {
     pose.inverse_transform_point(&Point3::new(world[0], world[1], world[2]))
+}
+
+/// A 160x120 camera with the synthetic split's field of view (a tenth of its pixels in
+/// each direction, about): frames that map and render in milliseconds.
+pub const SMALL_CAMERA: Pinhole = Pinhole {
+    fx: 138.6,
+    fy: 138.6,
+    cx: 80.0,
+    cy: 60.0,
+    width: 160,
+    height: 120,
+};
+
+/// The synthetic split of `scenes` scenes with `frames` frames each, seen by `camera`,
+/// with or without the simulated network's predictions (which cost most of a frame's
+/// rendering time); everything else is the split's default.
+pub fn synthetic(scenes: usize, frames: usize, camera: Pinhole, predictions: bool) -> Synthetic {
+    Synthetic::new(SynthOptions {
+        scenes,
+        frames,
+        camera,
+        predictions,
+        ..SynthOptions::default()
+    })
+    .expect("a synthetic split of valid options")
 }

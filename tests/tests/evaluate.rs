@@ -3,29 +3,16 @@
 //! snapshots for `sndt export`.
 
 use sndt_core::{Config, Pinhole};
-use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
+use sndt_host::dataset::synthetic::Synthetic;
 use sndt_host::dataset::{Dataset, Frame, LabelSource, Rays};
 use sndt_host::eval::evaluate::{evaluate, load_snapshot, save_snapshot, EvalOptions};
 use sndt_host::mapping::{backproject, integrate_frame, HostMap};
 use std::sync::Arc;
 
-const CAM: Pinhole = Pinhole {
-    fx: 138.6,
-    fy: 138.6,
-    cx: 80.0,
-    cy: 60.0,
-    width: 160,
-    height: 120,
-};
+const CAM: Pinhole = sndt_tests::SMALL_CAMERA;
 
 fn split(frames: usize) -> Synthetic {
-    Synthetic::new(SynthOptions {
-        scenes: 2,
-        frames,
-        camera: CAM,
-        ..SynthOptions::default()
-    })
-    .unwrap()
+    sndt_tests::synthetic(2, frames, CAM, true)
 }
 
 fn read_gray8(path: &std::path::Path) -> (u32, u32, Vec<u8>) {

@@ -6,7 +6,7 @@
 use sndt_core::Config;
 use sndt_host::dataset::frame::LabelSource;
 use sndt_host::dataset::ros::msgs::{definitions, from_cdr, Octomap};
-use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
+use sndt_host::dataset::synthetic::CAMERA;
 use sndt_host::eval::evaluate::{evaluate, EvalOptions};
 use sndt_host::output::octomap::{write_octomap, OctoFormat, OctoMap};
 use sndt_host::output::ros::export::{MAP_FRAME, OCTOMAP};
@@ -16,13 +16,7 @@ use sndt_host::output::ros::write::frame_time;
 fn map_bags_carry_the_occupancy_as_an_octomap_message() {
     let dir = std::env::temp_dir().join(format!("sndt-octomap-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let s = Synthetic::new(SynthOptions {
-        scenes: 1,
-        frames: 3,
-        predictions: false,
-        ..SynthOptions::default()
-    })
-    .unwrap();
+    let s = sndt_tests::synthetic(1, 3, CAMERA, false);
     let options = EvalOptions {
         mcap: Some(dir.join("m.mcap")),
         mcap_interval: Some(2),

@@ -4,7 +4,6 @@
 //! pixel, row-major).
 
 use sndt_core::{Pinhole, Point3};
-use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
 use sndt_host::dataset::{Dataset, Frame};
 use sndt_host::output::points::write_points;
 
@@ -50,14 +49,7 @@ fn expected_points(frame: &Frame) -> Vec<[f32; 3]> {
 
 #[test]
 fn exported_points_are_the_frames_world_points() {
-    let split = Synthetic::new(SynthOptions {
-        scenes: 1,
-        frames: 4,
-        predictions: false,
-        camera: CAM,
-        ..SynthOptions::default()
-    })
-    .unwrap();
+    let split = sndt_tests::synthetic(1, 4, CAM, false);
     let ids = &split.frames()[..3];
     let out = std::env::temp_dir()
         .join(format!("sndt-points-{}", std::process::id()))

@@ -6,7 +6,6 @@
 use sndt_core::{
     Config, Isometry3, LabeledPoint, Labels, Map, MissModel, Pinhole, Point3, VoxelKey,
 };
-use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
 use sndt_host::dataset::Dataset;
 use sndt_host::eval::compare::{compare, Options};
 use sndt_host::reference::RefMap;
@@ -270,14 +269,7 @@ fn core_matches_reference_within_tolerances_at_10cm() {
         width: 256,
         height: 192,
     };
-    let split = Synthetic::new(SynthOptions {
-        scenes: 1,
-        frames: 20,
-        camera,
-        predictions: false,
-        ..SynthOptions::default()
-    })
-    .unwrap();
+    let split = sndt_tests::synthetic(1, 20, camera, false);
     let frames: Vec<_> = split
         .frames()
         .iter()

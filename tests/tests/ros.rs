@@ -6,7 +6,7 @@ use sndt_core::Config;
 use sndt_host::dataset::frame::LabelSource;
 use sndt_host::dataset::ros::bag::{Bag, BagOptions};
 use sndt_host::dataset::ros::msgs::{self, Header, TfMessage, TransformStamped};
-use sndt_host::dataset::synthetic::{write_split, SynthOptions, Synthetic};
+use sndt_host::dataset::synthetic::{write_split, Synthetic, CAMERA};
 use sndt_host::dataset::{open, Dataset, OpenOptions};
 use sndt_host::mapping::{boxed_map, integrate_frame, HostMap};
 use sndt_host::output::ros::write::{
@@ -21,13 +21,7 @@ fn temp(name: &str) -> PathBuf {
 }
 
 fn split(frames: usize) -> Synthetic {
-    Synthetic::new(SynthOptions {
-        scenes: 1,
-        frames,
-        predictions: false,
-        ..SynthOptions::default()
-    })
-    .unwrap()
+    sndt_tests::synthetic(1, frames, CAMERA, false)
 }
 
 fn checksum(ds: &dyn Dataset) -> u32 {
@@ -396,13 +390,7 @@ fn sndt_map_writes_a_growing_map_bag_per_trajectory() {
     use sndt_host::eval::evaluate::{evaluate, EvalOptions};
     use sndt_host::output::ros::export::{GAUSSIANS, POINTS};
     let dir = temp("growing");
-    let s = Synthetic::new(SynthOptions {
-        scenes: 2,
-        frames: 3,
-        predictions: false,
-        ..SynthOptions::default()
-    })
-    .unwrap();
+    let s = sndt_tests::synthetic(2, 3, CAMERA, false);
     let options = EvalOptions {
         mcap: Some(dir.join("m.mcap")),
         mcap_interval: Some(2),

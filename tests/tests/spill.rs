@@ -4,29 +4,16 @@
 
 use sndt_core::{Config, Map, Pinhole, Record, RecordKind, StreamWriter, STREAM_FRAME_BYTES};
 use sndt_host::cli::merge::{run as merge, MergeArgs};
-use sndt_host::dataset::synthetic::{SynthOptions, Synthetic};
+use sndt_host::dataset::synthetic::Synthetic;
 use sndt_host::dataset::{Dataset, LabelSource};
 use sndt_host::eval::evaluate::{evaluate, EvalOptions};
 use sndt_host::mapping::{boxed_map, integrate_frame, HostMap};
 use sndt_host::mapping::{DeviceCapacity, GlobalMap, Spill, Tier1};
 
-const CAM: Pinhole = Pinhole {
-    fx: 138.6,
-    fy: 138.6,
-    cx: 80.0,
-    cy: 60.0,
-    width: 160,
-    height: 120,
-};
+const CAM: Pinhole = sndt_tests::SMALL_CAMERA;
 
 fn room(frames: usize) -> Synthetic {
-    Synthetic::new(SynthOptions {
-        scenes: 1,
-        frames,
-        camera: CAM,
-        ..SynthOptions::default()
-    })
-    .unwrap()
+    sndt_tests::synthetic(1, frames, CAM, true)
 }
 
 fn options(device: Option<(DeviceCapacity, Spill)>) -> EvalOptions {
