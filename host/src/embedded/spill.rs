@@ -25,10 +25,7 @@ use crate::embedded::testvector::{TestVector, VectorMap, CLASSES};
 use crate::mapping::boxed_map;
 use crate::mapping::{check_stream, merge_checked, StreamError, StreamSummary};
 use anyhow::{anyhow, Result};
-use sndt_core::{
-    Config, Crc32, Depth, DepthImage, DepthKind, FrameReport, LabelImage, Map, Record,
-    StreamWriter, STREAM_FRAME_BYTES,
-};
+use sndt_core::{Config, Crc32, FrameReport, Map, Record, StreamWriter, STREAM_FRAME_BYTES};
 
 /// Cell size of the spill run, metres (the firmware's `spill::SPILL_CELL`). At 9 cm each
 /// frame fits the device map on its own (no point and no free-space update is dropped),
@@ -124,13 +121,7 @@ pub fn own_run(v: &TestVector) -> Result<SpillRun> {
     };
     let (mut reports, mut frame_bytes) = (Vec::new(), Vec::new());
     for (k, f) in v.frames.iter().enumerate() {
-        let image = DepthImage {
-            camera: v.camera,
-            depth: Depth::Metres(&f.depth),
-            kind: DepthKind::Planar,
-            labels: LabelImage::Top1(&f.labels),
-            stride: 1,
-        };
+        let image = v.depth_image(f);
         let before = link.stream.len();
         let mut sink = |r: Record<'_>| link.send(r) && global.merge_record(r).is_ok();
         let report = device

@@ -286,6 +286,18 @@ pub fn generate() -> TestVector {
 }
 
 impl TestVector {
+    /// Frame `f`'s depth image as the firmware integrates it: planar depth in metres, top-1
+    /// labels, every pixel, the vector's camera.
+    pub fn depth_image<'a>(&self, f: &'a VectorFrame) -> DepthImage<'a> {
+        DepthImage {
+            camera: self.camera,
+            depth: Depth::Metres(&f.depth),
+            kind: DepthKind::Planar,
+            labels: LabelImage::Top1(&f.labels),
+            stride: 1,
+        }
+    }
+
     /// The vector in the binary format of this module.
     pub fn to_bytes(&self) -> Vec<u8> {
         let c = &self.camera;
@@ -524,13 +536,7 @@ pub fn run(v: &TestVector) -> Result<VectorRun> {
         crate::mapping::boxed_map(v.config).map_err(|e| anyhow::anyhow!("config: {e}"))?;
     let mut reports = Vec::with_capacity(v.frames.len());
     for (k, f) in v.frames.iter().enumerate() {
-        let image = DepthImage {
-            camera: v.camera,
-            depth: Depth::Metres(&f.depth),
-            kind: DepthKind::Planar,
-            labels: LabelImage::Top1(&f.labels),
-            stride: 1,
-        };
+        let image = v.depth_image(f);
         let r = map
             .integrate_depth(&f.pose()?, &image)
             .map_err(|e| anyhow::anyhow!("frame {k}: integrate_depth: {e}"))?;

@@ -66,7 +66,7 @@ impl DeviceCapacity {
     }
 }
 
-/// `$body` with `$M` the [`SpillingMap`] type of capacity `$cap`.
+/// `$body` with `$M` the [`SpillingMap`](crate::mapping::SpillingMap) type of capacity `$cap`.
 #[macro_export]
 macro_rules! with_device {
     ($cap:expr, $M:ident => $body:expr) => {

@@ -12,7 +12,7 @@
 //! costs about 1.3 times a frame of one room (280 against 220 ms on 2 cores).
 //!
 //! The floor is made here (layout: rooms placed along the corridor, the corridor's
-//! primitives); [`walk`] times the walks through it and [`planner`] plans their paths on
+//! primitives); `walk.rs` times the walks through it and `planner.rs` plans their paths on
 //! the clearance grid.
 
 mod planner;
