@@ -225,3 +225,33 @@ pub fn read_label_map(path: &std::path::Path) -> anyhow::Result<Vec<(u8, u8)>> {
     }
     Ok(map)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::{OpenArgs, PredictionsArgs};
+    use clap::Parser;
+
+    /// A command line of nothing but the shared dataset options.
+    #[derive(Parser)]
+    struct Probe {
+        #[command(flatten)]
+        open: OpenArgs,
+        #[command(flatten)]
+        predictions: PredictionsArgs,
+    }
+
+    /// `Default` (what library callers and doctests use) is what the command line gives when
+    /// no option is set: the two are written separately, so they are compared here.
+    #[test]
+    fn defaults_are_the_command_lines() {
+        let parsed = Probe::parse_from(["probe"]);
+        assert_eq!(
+            format!("{:?}", parsed.open),
+            format!("{:?}", OpenArgs::default())
+        );
+        assert_eq!(
+            format!("{:?}", parsed.predictions),
+            format!("{:?}", PredictionsArgs::default())
+        );
+    }
+}
