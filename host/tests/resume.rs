@@ -232,11 +232,10 @@ fn an_interrupted_experiment_resumes_to_the_same_tables() {
 /// manifest and the option that differs.
 fn assert_refused(out: &Path) {
     for (extra, differs) in [
-        // clap appends a repeated `--cell` to the first. The manifest keeps the option's
-        // old name, `--cells`, so that stores written before the rename still resume.
+        // clap appends a repeated `--cell` to the first.
         (
             &["--resume", "--cell", "0.25"][..],
-            "--cells: stored 0.2, now 0.2,0.25",
+            "--cell: stored 0.2, now 0.2,0.25",
         ),
         (
             &["--resume", "--every", "2"][..],
