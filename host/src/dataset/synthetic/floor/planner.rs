@@ -1,9 +1,9 @@
 //! Paths through the floor: a clearance grid of the floor plan (the distance from each
 //! cell to the nearest thing standing on the floor), A* on it with a preference for
 //! clearance, shortcuts along clear lines, and the resampled, smoothed path a walk follows.
+//! It knows nothing of the floor it is made from (the floor and its walks use it).
 
-use super::super::geometry::Primitive;
-use super::Floor;
+use crate::dataset::synthetic::geometry::Primitive;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
@@ -16,21 +16,20 @@ pub(super) const R_MIN: f32 = 0.34;
 /// Paths prefer to keep this much clearance.
 const R_PREF: f32 = 0.8;
 
-impl Floor {
+impl Grid {
     /// A smooth path from `a` to `b` keeping clear of everything.
     ///
     /// # Panics
-    /// If there is none (every room is checked to be enterable when generated).
+    /// If there is none (every room of a floor is checked to be enterable when generated).
     pub(super) fn path(&self, a: [f32; 2], b: [f32; 2]) -> Vec<[f32; 2]> {
         let cells = self
-            .grid
             .astar(a, b)
             .expect("every room of the floor is reachable from the corridor");
-        let short = self.grid.shortcut(&cells);
+        let short = self.shortcut(&cells);
         let fine = resample(&short, 0.05);
         for half in [8, 4, 2] {
             let smooth = smoothed(&fine, half);
-            if smooth.iter().all(|p| self.grid.at(p) >= R_MIN) {
+            if smooth.iter().all(|p| self.at(p) >= R_MIN) {
                 return smooth;
             }
         }

@@ -95,7 +95,7 @@ impl Floor {
         for &r in &order {
             let room = &self.rooms[r];
             let stand = self.standpoint(room, &mut rng);
-            let path = self.path(at, stand);
+            let path = self.grid.path(at, stand);
             let arrive = heading(&path);
             // Look to one side while arriving, then sweep to the other (which first: the
             // walk's parity).
@@ -105,7 +105,7 @@ impl Floor {
             steps.push(Step::Dwell(views.to_vec()));
             at = stand;
         }
-        steps.push(Step::Move(self.path(at, end), None));
+        steps.push(Step::Move(self.grid.path(at, end), None));
         steps
     }
 

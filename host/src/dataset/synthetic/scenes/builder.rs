@@ -2,11 +2,20 @@
 //! things worth looking at) and its placement rules: local frames of furniture, free floor
 //! spots against a wall or inside a region, free wall spans.
 
-use super::SceneKind;
+use super::kind::SceneKind;
 use crate::dataset::synthetic::geometry::{Primitive, Shape};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use std::f32::consts::{FRAC_PI_2, PI};
+
+/// Wall, floor and ceiling thickness.
+pub(crate) const WALL_T: f32 = 0.12;
+
+/// Width of a door (and of the doorway of a room on a building floor).
+pub(crate) const DOOR_W: f32 = 0.9;
+
+/// Height of a doorway (the top of the door frame).
+pub(crate) const DOOR_H: f32 = 2.1;
 
 /// Where a piece of furniture stands: its local frame has x along its width, y along its
 /// depth (away from the wall it stands against), z up; `yaw` turns local x into world.

@@ -7,101 +7,26 @@
 //! boxes, shelves). A few unlabelled fixtures (ceiling lights, vents, sockets) give void
 //! pixels, as Hypersim has. Everything is deterministic in the seed.
 //!
-//! The [`SynthScene`] type and the generator's entry points are here; the generator itself
-//! is a `Builder` that places primitives: its state and placement rules (`builder.rs`), the
-//! room shell (`shell.rs`), furniture and small objects (`furniture.rs`) and the six kinds
-//! of room (`kinds.rs`).
+//! The [`SynthScene`] type and the generator's entry points are here, the kinds of room in
+//! `kind.rs` and the extra NYU40 ids in [`class`]; the generator itself is a `Builder`
+//! that places primitives: its state, measures and placement rules (`builder.rs`), the room
+//! shell (`shell.rs`), furniture and small objects (`furniture.rs`) and what each kind of
+//! room gets (`rooms.rs`). Those files use only each other and `kind.rs`, never this one.
 
 mod builder;
+pub mod class;
 mod furniture;
-mod kinds;
+mod kind;
+mod rooms;
 mod shell;
 
 use super::geometry::{Bvh, Cast, Hit, Primitive, Shape};
 use builder::Builder;
+pub(crate) use builder::{DOOR_H, DOOR_W, WALL_T};
+use class::*;
+pub use kind::SceneKind;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-
-/// NYU40 ids used here beyond those in [`crate::dataset::synthetic::room::nyu`].
-#[allow(missing_docs)]
-pub mod class {
-    pub use crate::dataset::synthetic::room::nyu::*;
-    pub const CABINET: u8 = 3;
-    pub const CHAIR: u8 = 5;
-    pub const SOFA: u8 = 6;
-    pub const DOOR: u8 = 8;
-    pub const WINDOW: u8 = 9;
-    pub const BOOKSHELF: u8 = 10;
-    pub const COUNTER: u8 = 12;
-    pub const BLINDS: u8 = 13;
-    pub const DESK: u8 = 14;
-    pub const CURTAIN: u8 = 16;
-    pub const DRESSER: u8 = 17;
-    pub const PILLOW: u8 = 18;
-    pub const MIRROR: u8 = 19;
-    pub const FLOOR_MAT: u8 = 20;
-    pub const CLOTHES: u8 = 21;
-    pub const REFRIGERATOR: u8 = 24;
-    pub const TELEVISION: u8 = 25;
-    pub const PAPER: u8 = 26;
-    pub const TOWEL: u8 = 27;
-    pub const SHOWER_CURTAIN: u8 = 28;
-    pub const BOX: u8 = 29;
-    pub const WHITEBOARD: u8 = 30;
-    pub const PERSON: u8 = 31;
-    pub const NIGHT_STAND: u8 = 32;
-    pub const TOILET: u8 = 33;
-    pub const SINK: u8 = 34;
-    pub const BATHTUB: u8 = 36;
-    pub const BAG: u8 = 37;
-    pub const OTHER_STRUCTURE: u8 = 38;
-    pub const OTHER_FURNITURE: u8 = 39;
-    pub const OTHER_PROP: u8 = 40;
-    /// Unlabelled geometry.
-    pub const VOID: u8 = 0;
-}
-use class::*;
-
-/// The kinds of room the generator knows.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum SceneKind {
-    /// Sofa, TV, coffee table, bookshelf, lamps.
-    LivingRoom,
-    /// Bed, night stands, dresser, wardrobe.
-    Bedroom,
-    /// Counters, cabinets, sink, refrigerator, dining table.
-    Kitchen,
-    /// Desks, chairs, monitors, whiteboard, shelves.
-    Office,
-    /// Bathtub, toilet, sink, mirror, towels.
-    Bathroom,
-    /// A large space (up to 15 m) with living, dining, kitchen and work zones.
-    OpenPlan,
-}
-
-impl SceneKind {
-    /// All kinds, in the order the generator cycles through them.
-    pub const ALL: [SceneKind; 6] = [
-        SceneKind::LivingRoom,
-        SceneKind::Bedroom,
-        SceneKind::Kitchen,
-        SceneKind::Office,
-        SceneKind::Bathroom,
-        SceneKind::OpenPlan,
-    ];
-
-    /// Short name used in scene names.
-    pub fn name(self) -> &'static str {
-        match self {
-            SceneKind::LivingRoom => "living",
-            SceneKind::Bedroom => "bedroom",
-            SceneKind::Kitchen => "kitchen",
-            SceneKind::Office => "office",
-            SceneKind::Bathroom => "bathroom",
-            SceneKind::OpenPlan => "openplan",
-        }
-    }
-}
 
 /// A generated scene.
 #[derive(Clone, Debug)]
@@ -256,15 +181,6 @@ impl SynthScene {
         out
     }
 }
-
-/// Wall, floor and ceiling thickness.
-pub(crate) const WALL_T: f32 = 0.12;
-
-/// Width of a door (and of the doorway of a room on a building floor).
-pub(crate) const DOOR_W: f32 = 0.9;
-
-/// Height of a doorway (the top of the door frame).
-pub(crate) const DOOR_H: f32 = 2.1;
 
 /// A room whose door stands open in a doorway through its wall
 /// ([`SynthScene::generate_open`]), in its own frame: interior `[0, size]`.

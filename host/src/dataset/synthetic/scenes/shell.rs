@@ -1,9 +1,8 @@
 //! The room shell: floor, ceiling, four walls with a door, windows, and unlabelled
 //! fixtures (ceiling lights, vents, sockets).
 
-use super::builder::Builder;
+use super::builder::{Builder, DOOR_W, WALL_T};
 use super::class::*;
-use super::{DOOR_W, WALL_T};
 use crate::dataset::synthetic::geometry::{Primitive, Shape};
 
 impl Builder {
