@@ -18,6 +18,7 @@ pub mod budget;
 pub mod cloud;
 pub mod compare;
 pub mod demo;
+pub mod dynamics;
 pub mod experiment;
 pub mod export;
 pub mod info;
@@ -58,6 +59,9 @@ enum Command {
     /// The paper's comparison: S-NDT, S-BKI and OS-BKI per cell size and kernel length;
     /// Tables I and II (Markdown, CSV), per-class IoU and rate-vs-mIoU charts.
     Experiment(experiment::ExperimentArgs),
+    /// How fast the map clears what moved and relabels what replaced it, and what the static
+    /// scene loses, against OctoMap on the same points (the dynamic synthetic room).
+    Dynamics(dynamics::DynamicsArgs),
     /// Integrate frames into the core and the f64 reference and compare them per cell size.
     Compare(compare::CompareArgs),
     /// Exact memory of a Map<N, B, K>; with a dataset, peak voxels, evictions and the spill
@@ -85,6 +89,7 @@ pub fn main() -> Result<()> {
         Command::Map(a) => map::run(&a),
         Command::Merge(a) => merge::run(&a),
         Command::Experiment(a) => experiment::run(&a),
+        Command::Dynamics(a) => dynamics::run(&a),
         Command::Compare(a) => compare::run(&a),
         Command::Budget(a) => budget::run(&a),
         Command::Export(a) => export::run(&a),

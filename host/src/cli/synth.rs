@@ -1,10 +1,12 @@
 //! `sndt synth`: a synthetic labelled split written in the prepared layout (no download),
 //! with its class histogram, preview pictures and the raw prediction's score: separate
-//! rooms, or a walk through the building floor.
+//! rooms, a walk through the building floor, or the room where things move.
 
 use crate::dataset::classes::{render_color, NYU40};
 use crate::dataset::source::Dataset;
-use crate::dataset::synthetic::{floor, write_split, DepthNoise, SynthOptions, Synthetic};
+use crate::dataset::synthetic::{
+    dynamic, floor, write_split, DepthNoise, DynamicOptions, SynthOptions, Synthetic,
+};
 use crate::eval::label_stats::LabelStats;
 use crate::output::picture;
 use crate::output::progress::progress;
@@ -21,13 +23,17 @@ pub enum SceneArg {
     Rooms,
     /// One walk through a building floor: eleven rooms along a corridor (`--walk`).
     Floor,
+    /// The room where things move: a chair is moved, an object replaced, a door opens,
+    /// a person and a cart pass (`--change`, `--frozen`).
+    Dynamic,
 }
 
 /// Arguments of `sndt synth`.
 #[derive(clap::Args, Clone, Debug)]
 #[command(after_help = "Examples:
   sndt synth --out data/synth --scenes 2 --frames-per-scene 20 --no-predictions
-  sndt synth --out data/floor --scene floor --walk 2 --frames-per-scene 200")]
+  sndt synth --out data/floor --scene floor --walk 2 --frames-per-scene 200
+  sndt synth --out data/dynamic --scene dynamic")]
 pub struct SynthArgs {
     /// Output directory (the dataset root) of the prepared layout.
     #[arg(long, required_unless_present = "mcap")]
@@ -42,8 +48,9 @@ pub struct SynthArgs {
     /// Compression of the bags' chunks (`none` as `ros2 bag record` writes by default).
     #[arg(long, value_enum, default_value_t = ChunkCompression::Zstd, requires = "mcap")]
     pub mcap_compression: ChunkCompression,
-    /// What to generate: separate rooms, or a walk through the building floor (scene
-    /// `synth_floor`, trajectory `cam_NN` of walk NN + 1).
+    /// What to generate: separate rooms, a walk through the building floor (scene
+    /// `synth_floor`, trajectory `cam_NN` of walk NN + 1), or the room where things move
+    /// (scene `synth_dynamic`).
     #[arg(long, value_enum, default_value = "rooms")]
     pub scene: SceneArg,
     /// Number of rooms with `--scene rooms` (kinds cycle: living, bedroom, kitchen, office,
@@ -55,12 +62,21 @@ pub struct SynthArgs {
     /// standpoints and views) [default: 1].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub walk: Option<u32>,
+    /// With `--scene dynamic`: the frame of the first change; every event must fit in the
+    /// walk [default: 30].
+    #[arg(long, value_name = "FRAME")]
+    pub change: Option<u32>,
+    /// With `--scene dynamic`: leave every object where it stands at frame 0 (the frozen
+    /// twin the dynamics report compares with).
+    #[arg(long)]
+    pub frozen: bool,
     /// Seed of everything.
     #[arg(long, default_value_t = crate::dataset::synthetic::DEFAULT_SEED)]
     pub seed: u64,
     /// Frames of each scene's camera trajectory (one trajectory per scene); with `--scene
     /// floor`, frames the walk is sampled at (1000: about 9 per second; fewer: the same
-    /// walk at a lower frame rate) [default: 100, with --scene floor 1000].
+    /// walk at a lower frame rate) [default: 100, with --scene floor 1000, with --scene
+    /// dynamic 160].
     #[arg(long, value_name = "N")]
     pub frames_per_scene: Option<usize>,
     /// Add range-dependent depth noise (Kinect v1 model).
@@ -75,15 +91,24 @@ pub struct SynthArgs {
 /// previews and scores the raw predictions.
 pub fn run(a: &SynthArgs) -> Result<()> {
     let t = Instant::now();
-    let floor_walk = match a.scene {
-        SceneArg::Rooms if a.walk.is_some() => bail!("--walk: only with --scene floor"),
-        SceneArg::Rooms => None,
-        SceneArg::Floor if a.scenes.is_some() => bail!("--scenes: only with --scene rooms"),
-        SceneArg::Floor => Some(a.walk.unwrap_or(1)),
-    };
-    let default_frames = match floor_walk {
-        Some(_) => floor::DEFAULT_FRAMES,
-        None => SynthOptions::default().frames,
+    if a.walk.is_some() && a.scene != SceneArg::Floor {
+        bail!("--walk: only with --scene floor");
+    }
+    if a.scenes.is_some() && a.scene != SceneArg::Rooms {
+        bail!("--scenes: only with --scene rooms");
+    }
+    if (a.change.is_some() || a.frozen) && a.scene != SceneArg::Dynamic {
+        bail!("--change and --frozen: only with --scene dynamic");
+    }
+    let floor_walk = (a.scene == SceneArg::Floor).then(|| a.walk.unwrap_or(1));
+    let dynamic = (a.scene == SceneArg::Dynamic).then(|| DynamicOptions {
+        change: a.change.unwrap_or(dynamic::DEFAULT_CHANGE),
+        frozen: a.frozen,
+    });
+    let default_frames = match a.scene {
+        SceneArg::Rooms => SynthOptions::default().frames,
+        SceneArg::Floor => floor::DEFAULT_FRAMES,
+        SceneArg::Dynamic => dynamic::DEFAULT_FRAMES,
     };
     let options = SynthOptions {
         scenes: a.scenes.unwrap_or(SynthOptions::default().scenes),
@@ -92,6 +117,7 @@ pub fn run(a: &SynthArgs) -> Result<()> {
         noise: a.noise.then_some(DepthNoise::KINECT),
         predictions: !a.no_predictions,
         floor: floor_walk,
+        dynamic,
         ..SynthOptions::default()
     };
     let split = Synthetic::new(options)?;
@@ -177,7 +203,17 @@ fn print_class_histogram(class_pixels: &[u64]) {
 fn write_previews(split: &Synthetic, dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     for (_, ids) in split.trajectories() {
-        for id in [&ids[0], &ids[ids.len() / 2]] {
+        // The dynamic room: before the change, the person standing, the cart passing, the end.
+        let picks: Vec<usize> = match split.dynamic_scene().and_then(|s| s.events.first()) {
+            Some(e) => vec![
+                0,
+                e.first as usize + 15,
+                e.first as usize + 55,
+                ids.len() - 1,
+            ],
+            None => vec![0, ids.len() / 2],
+        };
+        for id in picks.iter().filter_map(|&i| ids.get(i)) {
             let f = split.load(id)?;
             let gt = f.labels.clone().unwrap_or_default();
             let pred = f

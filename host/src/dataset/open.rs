@@ -15,7 +15,13 @@ use std::path::Path;
 ///   trajectory `cam_00`;
 /// - `synthetic:floor:WALK`: walk `WALK` (1, 2, ...; trajectory `cam_NN`, `NN = WALK - 1`);
 /// - `synthetic:floor:WALK:FRAMES`: the same walk sampled at `FRAMES` frames (fewer frames
-///   are the whole walk at a lower frame rate).
+///   are the whole walk at a lower frame rate);
+/// - `synthetic:dynamic`: the room where things move
+///   ([`dynamic`](super::synthetic::dynamic)), 160 frames, the first change at frame 30,
+///   scene `synth_dynamic`; `synthetic:dynamic:FRAMES` and
+///   `synthetic:dynamic:FRAMES:CHANGE` set both (every event must fit in the walk);
+///   `synthetic:dynamic-frozen[...]` is the same walk with every object left where it
+///   stands at frame 0.
 ///
 /// ```
 /// let d = sndt_host::dataset::open_spec("synthetic:1:2", &Default::default()).unwrap();
@@ -24,35 +30,68 @@ use std::path::Path;
 /// assert_eq!(f.frames()[2].to_string(), "synth_floor/cam_01/0002");
 /// ```
 pub fn open_spec(spec: &str, options: &OpenOptions) -> Result<Box<dyn Dataset>> {
-    if let Some(rest) = spec.strip_prefix("synthetic") {
-        let mut o = super::synthetic::SynthOptions::default();
-        let parts: Vec<&str> = rest.split(':').skip(1).collect();
-        match parts.as_slice() {
-            [] if rest.is_empty() => {}
-            ["floor", more @ ..] if more.len() <= 2 => {
-                let walk = more.first().map_or(Ok(1), |w| w.parse());
-                let walk: u32 = walk.with_context(|| format!("{spec}: walk"))?;
-                if walk == 0 {
-                    bail!("{spec}: walks are numbered from 1");
-                }
-                o.floor = Some(walk);
-                o.frames = match more.get(1) {
-                    Some(f) => f.parse().with_context(|| format!("{spec}: frames"))?,
-                    None => super::synthetic::floor::DEFAULT_FRAMES,
-                };
-            }
-            [scenes, frames] => {
-                o.scenes = scenes.parse().with_context(|| format!("{spec}: scenes"))?;
-                o.frames = frames.parse().with_context(|| format!("{spec}: frames"))?;
-            }
-            _ => bail!(
-                "{spec}: expected synthetic, synthetic:SCENES:FRAMES, synthetic:floor, \
-                 synthetic:floor:WALK or synthetic:floor:WALK:FRAMES"
-            ),
-        }
-        return Ok(Box::new(super::synthetic::Synthetic::new(o)?));
+    match synthetic_options(spec) {
+        Some(o) => Ok(Box::new(super::synthetic::Synthetic::new(o?)?)),
+        None => open(Path::new(spec), options),
     }
-    open(Path::new(spec), options)
+}
+
+/// The options of a `synthetic...` spec (see [`open_spec`]); `None` for any other spec.
+///
+/// ```
+/// let o = sndt_host::dataset::open::synthetic_options("synthetic:dynamic:120").unwrap().unwrap();
+/// assert_eq!((o.frames, o.dynamic.unwrap().change), (120, 30));
+/// assert!(sndt_host::dataset::open::synthetic_options("data/hypersim").is_none());
+/// ```
+pub fn synthetic_options(spec: &str) -> Option<Result<super::synthetic::SynthOptions>> {
+    let rest = spec.strip_prefix("synthetic")?;
+    Some(parse_synthetic(spec, rest))
+}
+
+/// [`synthetic_options`] of `spec`, `rest` being what follows `synthetic`.
+fn parse_synthetic(spec: &str, rest: &str) -> Result<super::synthetic::SynthOptions> {
+    let mut o = super::synthetic::SynthOptions::default();
+    let parts: Vec<&str> = rest.split(':').skip(1).collect();
+    match parts.as_slice() {
+        [] if rest.is_empty() => {}
+        ["floor", more @ ..] if more.len() <= 2 => {
+            let walk = more.first().map_or(Ok(1), |w| w.parse());
+            let walk: u32 = walk.with_context(|| format!("{spec}: walk"))?;
+            if walk == 0 {
+                bail!("{spec}: walks are numbered from 1");
+            }
+            o.floor = Some(walk);
+            o.frames = match more.get(1) {
+                Some(f) => f.parse().with_context(|| format!("{spec}: frames"))?,
+                None => super::synthetic::floor::DEFAULT_FRAMES,
+            };
+        }
+        ["dynamic" | "dynamic-frozen", more @ ..] if more.len() <= 2 => {
+            let frozen = parts[0] == "dynamic-frozen";
+            let mut d = super::synthetic::DynamicOptions {
+                frozen,
+                ..Default::default()
+            };
+            o.frames = match more.first() {
+                Some(f) => f.parse().with_context(|| format!("{spec}: frames"))?,
+                None => super::synthetic::dynamic::DEFAULT_FRAMES,
+            };
+            if let Some(c) = more.get(1) {
+                d.change = c.parse().with_context(|| format!("{spec}: change frame"))?;
+            }
+            o.dynamic = Some(d);
+        }
+        [scenes, frames] => {
+            o.scenes = scenes.parse().with_context(|| format!("{spec}: scenes"))?;
+            o.frames = frames.parse().with_context(|| format!("{spec}: frames"))?;
+        }
+        _ => bail!(
+            "{spec}: expected synthetic, synthetic:SCENES:FRAMES, synthetic:floor, \
+                 synthetic:floor:WALK, synthetic:floor:WALK:FRAMES, synthetic:dynamic or \
+                 synthetic:dynamic:FRAMES[:CHANGE]"
+        ),
+    }
+    Ok(o)
 }
 
 /// Whether `path` is a ROS 2 recording: an `.mcap` file, or a rosbag2 folder (one with a

@@ -6,9 +6,11 @@
 //! - [`evaluate`]: one map per trajectory, back-projected into every frame;
 //! - [`experiment`]: S-NDT, S-BKI and OS-BKI per cell size and kernel (Tables I and II),
 //!   with its finished runs kept on disk to resume it ([`experiment::store`]);
-//! - [`compare`]: the core against the f64 reference, with stated tolerances.
+//! - [`compare`]: the core against the f64 reference, with stated tolerances;
+//! - [`dynamics`]: how fast a map clears and relabels what moved, against OctoMap.
 
 pub mod compare;
+pub mod dynamics;
 pub mod evaluate;
 pub mod experiment;
 pub mod label_stats;

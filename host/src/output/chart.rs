@@ -176,3 +176,72 @@ fn rate_vs_miou_to(path: &Path, title: &str, series: &LabelledSeries) -> Result<
     root.present().map_err(err)?;
     Ok(())
 }
+
+/// One panel of [`ghost_over_time`]: a title, the frame its object left (drawn as a
+/// vertical line), and per map a name and its ghost share (0..=1) after each frame.
+pub type GhostPanel<'a> = (String, u32, Vec<(String, &'a [f64])>);
+
+/// Ghost surface over time: one panel per event, the share (%) of the object's former
+/// surface each map still holds occupied after each frame, one line colour per map.
+///
+/// ```
+/// let dir = std::env::temp_dir().join(format!("sndt-ghost-{}", std::process::id()));
+/// std::fs::create_dir_all(&dir).unwrap();
+/// let path = dir.join("ghost.svg");
+/// let g = [1.0, 1.0, 0.5, 0.0];
+/// let panel = ("chair moved".to_string(), 2, vec![("sndt 0.10".to_string(), &g[..])]);
+/// sndt_host::output::chart::ghost_over_time(&path, "ghost", &[panel]).unwrap();
+/// let svg = std::fs::read_to_string(&path).unwrap();
+/// assert!(svg.contains("chair moved") && svg.contains("sndt 0.10"));
+/// # std::fs::remove_dir_all(&dir).unwrap();
+/// ```
+pub fn ghost_over_time(path: &Path, title: &str, panels: &[GhostPanel]) -> Result<()> {
+    crate::atomic::write_atomic(path, |tmp| ghost_over_time_to(tmp, title, panels))
+}
+
+/// What [`ghost_over_time`] writes, into `path` directly.
+fn ghost_over_time_to(path: &Path, title: &str, panels: &[GhostPanel]) -> Result<()> {
+    let rows = panels.len().div_ceil(2).max(1);
+    let root = SVGBackend::new(path, (1100, 60 + 300 * rows as u32)).into_drawing_area();
+    let err = |e: DrawingAreaErrorKind<_>| anyhow!("{}: {e:?}", path.display());
+    root.fill(&WHITE).map_err(err)?;
+    let root = root.titled(title, ("sans-serif", 20)).map_err(err)?;
+    for (area, (name, vacated, series)) in root.split_evenly((rows, 2)).iter().zip(panels) {
+        let frames = series.iter().map(|(_, g)| g.len()).max().unwrap_or(1);
+        let mut chart = ChartBuilder::on(area)
+            .caption(name, ("sans-serif", 15))
+            .margin(10)
+            .x_label_area_size(35)
+            .y_label_area_size(45)
+            .build_cartesian_2d(0f64..frames as f64, 0f64..105f64)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc("frame")
+            .y_desc("ghost (% of former surface)")
+            .draw()
+            .map_err(err)?;
+        let at = *vacated as f64;
+        chart
+            .draw_series(LineSeries::new([(at, 0.0), (at, 105.0)], BLACK.mix(0.3)))
+            .map_err(err)?;
+        for (j, (label, ghost)) in series.iter().enumerate() {
+            let colour = Palette99::pick(j).to_rgba();
+            let line = ghost.iter().enumerate().map(|(t, g)| (t as f64, 100.0 * g));
+            chart
+                .draw_series(LineSeries::new(line, colour.stroke_width(2)))
+                .map_err(err)?
+                .label(label.as_str())
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + 15, y)], colour));
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .map_err(err)?;
+    }
+    root.present().map_err(err)?;
+    Ok(())
+}

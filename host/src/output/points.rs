@@ -114,26 +114,90 @@ pub fn write_points(data: &dyn Dataset, ids: &[FrameId], out: &Path) -> Result<P
 
 /// What [`write_points`] writes, into `out` directly.
 fn write_points_to(data: &dyn Dataset, ids: &[FrameId], out: &Path) -> Result<PointsSummary> {
-    let shown = out.display();
-    let count = u32::try_from(ids.len()).context("too many frames")?;
-    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
-    let file = File::create(out).with_context(|| format!("{shown}: creating"))?;
-    let mut w = BufWriter::new(file);
-    let mut header = MAGIC.to_vec();
-    header.extend_from_slice(&count.to_le_bytes());
-    w.write_all(&header)
-        .with_context(|| format!("{shown}: writing"))?;
-    let mut points = 0;
+    let mut w = PointsWriter::create_at(out, ids.len())?;
     for id in ids {
         let frame = data
             .load(id)
             .with_context(|| format!("loading frame {id}"))?;
-        let (origin, pts) = frame_points(&frame);
+        w.add_frame(&frame)?;
+    }
+    w.finish_at()
+}
+
+/// Writes a points file frame by frame, for a caller that has the frames at hand (the
+/// dynamics report renders each frame once for every map): the header with the frame
+/// count first, then [`PointsWriter::add_frame`] once per frame, then
+/// [`PointsWriter::finish`], which refuses a count that does not match. The file appears
+/// under its name only when finished.
+///
+/// ```
+/// use sndt_host::dataset::{open_spec, Dataset};
+/// use sndt_host::output::points::PointsWriter;
+/// let data = open_spec("synthetic:1:2", &Default::default()).unwrap();
+/// let path = std::env::temp_dir().join(format!("sndt-pw-{}.bin", std::process::id()));
+/// let mut w = PointsWriter::create(&path, 2).unwrap();
+/// for id in data.frames() {
+///     w.add_frame(&data.load(id).unwrap()).unwrap();
+/// }
+/// let summary = w.finish().unwrap();
+/// assert_eq!((summary.frames, summary.points), (2, 2 * 1024 * 768));
+/// # std::fs::remove_file(&path).unwrap();
+/// ```
+pub struct PointsWriter {
+    w: BufWriter<File>,
+    /// Where the file is written, and where it goes when finished.
+    tmp: PathBuf,
+    path: PathBuf,
+    frames: usize,
+    written: usize,
+    points: usize,
+}
+
+impl PointsWriter {
+    /// Starts a file of `frames` frames at `path` (written beside it until finished).
+    pub fn create(path: &Path, frames: usize) -> Result<PointsWriter> {
+        let tmp = crate::atomic::temporary(path)?;
+        let mut w = Self::create_at(&tmp, frames)?;
+        w.path = path.to_path_buf();
+        Ok(w)
+    }
+
+    /// Starts the file at `path` itself.
+    fn create_at(path: &Path, frames: usize) -> Result<PointsWriter> {
+        let shown = path.display();
+        let count = u32::try_from(frames).context("too many frames")?;
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        }
+        let file = File::create(path).with_context(|| format!("{shown}: creating"))?;
+        let mut w = BufWriter::new(file);
+        let mut header = MAGIC.to_vec();
+        header.extend_from_slice(&count.to_le_bytes());
+        w.write_all(&header)
+            .with_context(|| format!("{shown}: writing"))?;
+        Ok(PointsWriter {
+            w,
+            tmp: path.to_path_buf(),
+            path: path.to_path_buf(),
+            frames,
+            written: 0,
+            points: 0,
+        })
+    }
+
+    /// Appends one frame's sensor origin and world points ([`frame_points`]).
+    pub fn add_frame(&mut self, frame: &Frame) -> Result<()> {
+        let (origin, pts) = frame_points(frame);
         let Ok(n) = u32::try_from(pts.len()) else {
-            bail!("{id}: {} points do not fit a u32 count", pts.len());
+            bail!("{}: {} points do not fit a u32 count", frame.id, pts.len());
         };
+        if self.written == self.frames {
+            bail!(
+                "{}: more frames than the {} announced",
+                frame.id,
+                self.frames
+            );
+        }
         let mut body = Vec::with_capacity(16 + 12 * pts.len());
         for v in origin {
             body.extend_from_slice(&v.to_le_bytes());
@@ -142,14 +206,42 @@ fn write_points_to(data: &dyn Dataset, ids: &[FrameId], out: &Path) -> Result<Po
         for v in pts.iter().flatten() {
             body.extend_from_slice(&v.to_le_bytes());
         }
-        w.write_all(&body)
-            .with_context(|| format!("{shown}: writing"))?;
-        points += pts.len();
+        self.w
+            .write_all(&body)
+            .with_context(|| format!("{}: writing", self.tmp.display()))?;
+        self.written += 1;
+        self.points += pts.len();
+        Ok(())
     }
-    w.flush().with_context(|| format!("{shown}: writing"))?;
-    Ok(PointsSummary {
-        path: out.to_path_buf(),
-        frames: ids.len(),
-        points,
-    })
+
+    /// Flushes the file and gives it its name.
+    pub fn finish(self) -> Result<PointsSummary> {
+        let (tmp, path) = (self.tmp.clone(), self.path.clone());
+        let summary = self.finish_at();
+        let summary = summary.and_then(|s| crate::atomic::commit(&tmp, &path).map(|()| s));
+        if summary.is_err() {
+            let _ = std::fs::remove_file(&tmp);
+        }
+        summary.map(|s| PointsSummary { path, ..s })
+    }
+
+    /// Flushes the file where it is.
+    fn finish_at(mut self) -> Result<PointsSummary> {
+        let shown = self.tmp.display().to_string();
+        if self.written != self.frames {
+            bail!(
+                "{shown}: {} frames written of {}",
+                self.written,
+                self.frames
+            );
+        }
+        self.w
+            .flush()
+            .with_context(|| format!("{shown}: writing"))?;
+        Ok(PointsSummary {
+            path: self.tmp.clone(),
+            frames: self.frames,
+            points: self.points,
+        })
+    }
 }

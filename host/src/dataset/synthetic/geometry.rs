@@ -85,6 +85,31 @@ impl Aabb {
         }
     }
 
+    /// The smallest box holding both.
+    ///
+    /// ```
+    /// use sndt_host::dataset::synthetic::geometry::Aabb;
+    /// let a = Aabb { min: [0.0; 3], max: [1.0; 3] };
+    /// let b = Aabb { min: [2.0, -1.0, 0.5], max: [3.0, 0.0, 0.6] };
+    /// assert_eq!(a.union(&b), Aabb { min: [0.0, -1.0, 0.0], max: [3.0, 1.0, 1.0] });
+    /// ```
+    pub fn union(&self, o: &Aabb) -> Aabb {
+        let mut u = *self;
+        u.grow(o);
+        u
+    }
+
+    /// Whether `p` lies inside, faces included, after growing every side by `margin`.
+    ///
+    /// ```
+    /// use sndt_host::dataset::synthetic::geometry::Aabb;
+    /// let a = Aabb { min: [0.0; 3], max: [1.0; 3] };
+    /// assert!(a.contains(&[1.1, 0.5, 0.5], 0.2) && !a.contains(&[1.1, 0.5, 0.5], 0.0));
+    /// ```
+    pub fn contains(&self, p: &[f32; 3], margin: f32) -> bool {
+        (0..3).all(|a| p[a] >= self.min[a] - margin && p[a] <= self.max[a] + margin)
+    }
+
     fn centre(&self, a: usize) -> f32 {
         0.5 * (self.min[a] + self.max[a])
     }

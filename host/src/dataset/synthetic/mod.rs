@@ -4,6 +4,8 @@
 //! - [`scenes`]: procedural rooms of six kinds built from labelled primitives (the
 //!   scene type here, the generator's parts in a file each: placement rules, the room
 //!   shell, furniture, the kinds of room);
+//! - [`dynamic`]: a room where a chair is moved, an object replaced, a door opens and a
+//!   person and a cart pass (the scene of the dynamics report), and its frozen twin;
 //! - [`floor`]: a building floor of eleven such rooms along a corridor (its layout), and
 //!   walks through all of them (timing in `floor/walk.rs`, paths planned on a clearance
 //!   grid in `floor/planner.rs`);
@@ -20,6 +22,7 @@
 //! The renderer sits in the host's reader layer (see the crate doc): it makes the same
 //! [`Frame`]s a reader returns, and uses nothing above that layer.
 
+pub mod dynamic;
 pub mod floor;
 pub mod geometry;
 pub mod predict;
@@ -50,6 +53,9 @@ const MAX_RAY: f32 = 100.0;
 /// Added to the walk number to key the floor's noise and predictions (rooms use their
 /// scene number).
 const FLOOR_KEY: u64 = 0xF100;
+
+/// The same for the dynamic room.
+const DYNAMIC_KEY: u64 = 0xD100;
 
 /// One rendered view.
 #[derive(Clone, Debug, PartialEq)]
@@ -266,6 +272,27 @@ pub struct SynthOptions {
     /// `walk` (1, 2, ...) of the building floor ([`floor`]), scene
     /// [`floor::NAME`], camera `cam_NN` with `NN = walk - 1`.
     pub floor: Option<u32>,
+    /// `Some`: instead of rooms or the floor, the [`dynamic`] room for `frames` frames,
+    /// scene [`dynamic::NAME`], camera `cam_00`.
+    pub dynamic: Option<DynamicOptions>,
+}
+
+/// How the [`dynamic`] room changes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DynamicOptions {
+    /// The frame of the first change ([`dynamic::DEFAULT_CHANGE`]).
+    pub change: u32,
+    /// Every frame shows the scene as at frame 0 (the reference of static loss).
+    pub frozen: bool,
+}
+
+impl Default for DynamicOptions {
+    fn default() -> Self {
+        DynamicOptions {
+            change: dynamic::DEFAULT_CHANGE,
+            frozen: false,
+        }
+    }
 }
 
 impl Default for SynthOptions {
@@ -279,6 +306,7 @@ impl Default for SynthOptions {
             camera: CAMERA,
             model: predict::ModelParams::DEFAULT,
             floor: None,
+            dynamic: None,
         }
     }
 }
@@ -290,6 +318,8 @@ pub struct Synthetic {
     scenes: Vec<SynthScene>,
     /// The building floor, when the split is a walk of it (then `scenes` is empty).
     floor: Option<floor::Floor>,
+    /// The dynamic room, when the split is its walk.
+    dynamic: Option<dynamic::DynamicScene>,
     poses: Vec<Vec<Isometry3<f32>>>,
     frames: Vec<FrameId>,
     rays: Arc<Rays>,
@@ -311,6 +341,9 @@ impl Synthetic {
     pub fn new(options: SynthOptions) -> Result<Synthetic> {
         if let Some(walk) = options.floor {
             return Self::floor(options, walk);
+        }
+        if let Some(d) = options.dynamic {
+            return Self::dynamic(options, d);
         }
         if options.scenes == 0 || options.frames == 0 || options.frames > 10_000 {
             bail!("synthetic split: need 1.. scenes and 1..=10000 frames");
@@ -345,10 +378,50 @@ impl Synthetic {
             options,
             scenes,
             floor: None,
+            dynamic: None,
             poses,
             frames,
             rays,
         })
+    }
+
+    /// Builds the dynamic room's walk.
+    ///
+    /// ```
+    /// use sndt_host::dataset::Dataset;
+    /// use sndt_host::dataset::synthetic::{dynamic, DynamicOptions, Synthetic, SynthOptions};
+    /// let camera = sndt_core::Pinhole { fx: 40.0, fy: 40.0, cx: 32.0, cy: 24.0, width: 64, height: 48 };
+    /// let dynamic = Some(DynamicOptions::default());
+    /// let frames = dynamic::DEFAULT_FRAMES;
+    /// let walk = Synthetic::new(SynthOptions { dynamic, frames, camera, ..Default::default() }).unwrap();
+    /// let f = walk.load(&walk.frames()[4]).unwrap();
+    /// assert_eq!(f.id.to_string(), "synth_dynamic/cam_00/0004");
+    /// ```
+    fn dynamic(options: SynthOptions, d: DynamicOptions) -> Result<Synthetic> {
+        let scene = dynamic::DynamicScene::new(options.frames, d.change, d.frozen)?;
+        let poses = vec![(0..options.frames as u32).map(|f| scene.pose(f)).collect()];
+        let frames = (0..options.frames as u32)
+            .map(|index| FrameId {
+                scene: dynamic::NAME.into(),
+                cam: "cam_00".into(),
+                index,
+            })
+            .collect();
+        let rays = Arc::new(Rays::Pinhole(options.camera));
+        Ok(Synthetic {
+            options,
+            scenes: Vec::new(),
+            floor: None,
+            dynamic: Some(scene),
+            poses,
+            frames,
+            rays,
+        })
+    }
+
+    /// The dynamic room, when the split is its walk.
+    pub fn dynamic_scene(&self) -> Option<&dynamic::DynamicScene> {
+        self.dynamic.as_ref()
     }
 
     /// Builds the floor and walk `walk` of it.
@@ -381,6 +454,7 @@ impl Synthetic {
             options,
             scenes: Vec::new(),
             floor: Some(floor),
+            dynamic: None,
             poses,
             frames,
             rays,
@@ -414,6 +488,14 @@ impl Synthetic {
 
     /// Renders a frame and also returns the instance image.
     pub fn render_frame(&self, id: &FrameId) -> Result<(Frame, Vec<u16>)> {
+        if let Some(scene) = &self.dynamic {
+            if id.scene != dynamic::NAME || id.cam != "cam_00" || id.index as usize >= scene.frames
+            {
+                bail!("{id}: no such frame in the synthetic dynamic room's walk");
+            }
+            let pose = self.poses[0][id.index as usize];
+            return Ok(self.frame(id, &scene.at(id.index), pose, DYNAMIC_KEY));
+        }
         if let (Some(floor), Some(walk)) = (&self.floor, self.options.floor) {
             if id.scene != floor.name
                 || id.cam != Self::floor_cam(walk)
@@ -481,6 +563,17 @@ impl Synthetic {
 
 impl Dataset for Synthetic {
     fn describe(&self) -> String {
+        if let Some(scene) = &self.dynamic {
+            return format!(
+                "synthetic dynamic room{} (seed {}): {} frames of {}x{}, first change at frame {}",
+                if scene.frozen { ", frozen" } else { "" },
+                self.options.seed,
+                scene.frames,
+                self.options.camera.width,
+                self.options.camera.height,
+                scene.events.first().map_or(0, |e| e.first)
+            );
+        }
         if let (Some(floor), Some(walk)) = (&self.floor, self.options.floor) {
             return format!(
                 "synthetic building floor (seed {}): {} rooms, walk {walk} of {} frames of {}x{}",
