@@ -68,7 +68,7 @@ read -r flash ram stack < <(printf '%s\n' "$size_report" | awk '
 vector_bytes=$(stat -c %s "$VECTOR_DIR/frames.bin")
 printf 'flash:      %8d bytes (%d KiB of 1024 KiB; %d of it the test vector)\n' \
     "$flash" $(((flash + 1023) / 1024)) "$vector_bytes"
-printf 'static RAM: %8d bytes (%d KiB of 512 KiB; .bss %d bytes, the map 485,512 of it), stack region %d bytes\n' \
+printf 'static RAM: %8d bytes (%d KiB of 512 KiB; .bss %d bytes, the map 485,520 of it), stack region %d bytes\n' \
     "$ram" $(((ram + 1023) / 1024)) "$(printf '%s\n' "$size_report" | awk '$1 == ".bss" { print $2 }')" "$stack"
 if ((flash > 1024 * 1024 || ram + stack > 512 * 1024)); then
     echo "error: the C firmware exceeds its memory budget" >&2

@@ -93,6 +93,9 @@ bash scripts/ros.sh
 step "OctoMap: .bt, .ot and the map bag's message read by liboctomap, every leaf against sndt's map"
 bash scripts/octomap.sh
 
+step "OctoMap on the dynamic room: the same world points, its frames to clear and static loss"
+bash scripts/dynamics.sh
+
 step "aarch64: sndt-core tests (unit, property, doc) and the CRC check under qemu-aarch64"
 bash scripts/aarch64.sh
 

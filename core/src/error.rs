@@ -103,6 +103,8 @@ pub enum ConfigField {
     ClampMax,
     /// [`crate::Config::lambda`].
     Lambda,
+    /// [`crate::Config::see_through_miss`].
+    SeeThroughMiss,
     /// [`crate::Config::noise_base`].
     NoiseBase,
     /// [`crate::Config::noise_quadratic`].
@@ -122,7 +124,7 @@ pub enum ConfigField {
 
 impl ConfigField {
     /// Every field, in the order [`crate::Config::validate`] checks them.
-    pub const ALL: [ConfigField; 17] = [
+    pub const ALL: [ConfigField; 18] = [
         ConfigField::CellSize,
         ConfigField::QuantBits,
         ConfigField::NMin,
@@ -133,6 +135,7 @@ impl ConfigField {
         ConfigField::ClampMin,
         ConfigField::ClampMax,
         ConfigField::Lambda,
+        ConfigField::SeeThroughMiss,
         ConfigField::NoiseBase,
         ConfigField::NoiseQuadratic,
         ConfigField::MaxRange,
@@ -160,6 +163,7 @@ impl ConfigField {
             ConfigField::ClampMin => "clamp_min",
             ConfigField::ClampMax => "clamp_max",
             ConfigField::Lambda => "lambda",
+            ConfigField::SeeThroughMiss => "see_through_miss",
             ConfigField::NoiseBase => "noise_base",
             ConfigField::NoiseQuadratic => "noise_quadratic",
             ConfigField::MaxRange => "max_range",

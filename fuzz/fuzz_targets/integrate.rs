@@ -76,6 +76,8 @@ fn config(u: &mut Unstructured) -> Result<Config> {
     c.clamp_min = float(u, -30.0, 0.0)?;
     c.clamp_max = float(u, 0.0, 30.0)?;
     c.lambda = float(u, 0.0, 0.49)?;
+    // Multiples of 1/1024 in [-31, 0]: a little out of range too.
+    c.see_through_miss = -(u.int_in_range(0..=31 * 1024)? as f32) / 1024.0;
     c.noise_base = float(u, 1e-6, 1.0)?;
     c.noise_quadratic = float(u, 0.0, 1.0)?;
     c.max_range = float(u, 0.001, 50.0)?;

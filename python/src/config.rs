@@ -8,7 +8,7 @@ use pyo3::types::PyDict;
 use sndt_core::{Config, MissModel};
 
 /// The keyword names, in the order of the struct (`cell` is `cell_size`).
-pub const FIELDS: [&str; 18] = [
+pub const FIELDS: [&str; 19] = [
     "cell_size",
     "quant_bits",
     "n_min",
@@ -19,6 +19,7 @@ pub const FIELDS: [&str; 18] = [
     "clamp_min",
     "clamp_max",
     "lambda_",
+    "see_through_miss",
     "noise_base",
     "noise_quadratic",
     "max_range",
@@ -94,6 +95,7 @@ fn set(c: &mut Config, name: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
             };
         }
         "render_radius" => c.render_radius = float("a number")?,
+        "see_through_miss" => c.see_through_miss = float("a number")?,
         _ => {
             return Err(PyTypeError::new_err(format!(
             "Map() got an unexpected keyword argument '{name}'; the config fields are: cell, {}",
@@ -119,6 +121,7 @@ pub fn to_dict<'py>(py: Python<'py>, c: &Config) -> PyResult<Bound<'py, PyDict>>
         clamp_min,
         clamp_max,
         lambda,
+        see_through_miss,
         noise_base,
         noise_quadratic,
         max_range,
@@ -139,6 +142,7 @@ pub fn to_dict<'py>(py: Python<'py>, c: &Config) -> PyResult<Bound<'py, PyDict>>
     d.set_item("clamp_min", clamp_min)?;
     d.set_item("clamp_max", clamp_max)?;
     d.set_item("lambda_", lambda)?;
+    d.set_item("see_through_miss", see_through_miss)?;
     d.set_item("noise_base", noise_base)?;
     d.set_item("noise_quadratic", noise_quadratic)?;
     d.set_item("max_range", max_range)?;

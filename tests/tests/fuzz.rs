@@ -289,6 +289,7 @@ fn a_huge_cell_map_snapshot_reads_back() {
         votes_per_frame: 64,
         miss_model: sndt_core::MissModel::NdtOm,
         render_radius: 2.5,
+        see_through_miss: 0.0,
     };
     let pose = |q: [f32; 4], t: [f32; 3]| {
         let q = UnitQuaternion::new_unchecked(Quaternion::new(q[3], q[0], q[1], q[2]));

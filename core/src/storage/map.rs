@@ -20,7 +20,7 @@ const BUCKET_HEAD_BYTES: usize = core::mem::size_of::<u32>();
 
 /// Bytes of the map besides its two tables' slots and heads: config, counters and the
 /// voxel table's bookkeeping (the block table's is [`BLOCK_TABLE_BYTES`]).
-pub const MAP_HEADER_BYTES: usize = 112;
+pub const MAP_HEADER_BYTES: usize = 116;
 
 /// Bytes of the block table's bookkeeping; the table is 8-byte aligned, so it takes
 /// `round_up(BLOCK_TABLE_BYTES + B * BLOCK_BYTES, 8)` bytes.
@@ -190,6 +190,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             clamp_min: 0.0,
             clamp_max: 0.0,
             lambda: 0.0,
+            see_through_miss: 0.0,
             noise_base: 0.0,
             noise_quadratic: 0.0,
             max_range: 0.0,
@@ -362,7 +363,7 @@ mod tests {
         // A voxel slot (52 bytes + C, 4-aligned) and its bucket head; a block slot (176
         // bytes) and its bucket head.
         let voxel = (52 + C).div_ceil(4) * 4 + 4;
-        let bytes = (112 + V * voxel + (12 + B * 180).div_ceil(8) * 8).div_ceil(8) * 8;
+        let bytes = (116 + V * voxel + (12 + B * 180).div_ceil(8) * 8).div_ceil(8) * 8;
         assert_eq!(Map::<V, B, C>::VOXEL_BYTES, voxel, "VOXEL_BYTES C={C}");
         assert_eq!(
             Map::<V, B, C>::BYTES,
@@ -407,12 +408,12 @@ mod tests {
         assert_eq!(Map::<4096, 1024, 40>::VOXEL_BYTES, 96);
         assert_eq!(Map::<1, 1, 40>::VOXEL_BYTES, 96);
         assert_eq!(BLOCK_BYTES, 180);
-        assert_eq!(MAP_HEADER_BYTES, 112);
+        assert_eq!(MAP_HEADER_BYTES, 116);
         assert_eq!(BLOCK_TABLE_BYTES, 12);
         assert_eq!(core::mem::size_of::<Block>(), 176);
         assert_eq!(core::mem::size_of::<Voxel<40>>(), 92);
-        assert_eq!(Map::<1, 1, 1>::BYTES, 368); // 112 + (56 + 4) + (12 + 176 + 4) = 364 -> 368
-        assert_eq!(Map::<1, 2, 1>::BYTES, 552); // 112 + 60 + (12 + 2 * 180 = 372 -> 376) = 548 -> 552
+        assert_eq!(Map::<1, 1, 1>::BYTES, 368); // 116 + (56 + 4) + (12 + 176 + 4) = 368
+        assert_eq!(Map::<1, 2, 1>::BYTES, 552); // 116 + 60 + (12 + 2 * 180 = 372 -> 376) = 552
     }
 
     /// Regression: `Map::new` promises to replace invalid configs by the default, but `checked()` only

@@ -9,12 +9,15 @@
 //! | 2 | version ([`SNAPSHOT_VERSION`]) |
 //! | 2 | classes `C` |
 //! | 4 + 4 | voxel and block capacity of the writer |
-//! | 60 | config: cell_size, eigen_ratio, hit, miss, clamp_min, clamp_max, lambda, noise_base, noise_quadratic, max_range, render_radius (f32 bits), n_min, n_max (u32), quant_bits, top_k, min_score, miss_model, votes_per_frame (u8), 3 zero bytes |
+//! | 60 | config: cell_size, eigen_ratio, hit, miss, clamp_min, clamp_max, lambda, noise_base, noise_quadratic, max_range, render_radius (f32 bits), n_min, n_max (u32), quant_bits, top_k, min_score, miss_model, votes_per_frame (u8), see_through_miss (i16, in 1/1024 log-odds), 1 zero byte |
 //! | 4 | frames integrated |
 //! | 4 + 4 | block count, voxel count |
 //! | 142 each | blocks: key (3 x u16, biased by 32768), 64 x i16 log-odds, u64 surface mask |
 //! | 47 + C each | voxels: key (3 x u16), n (u32), S1 (3 x i32), S2 (6 x i32), vote sampling exponent (u8, <= 15), C x u8 histogram |
 //! | 4 | CRC-32 (IEEE) of everything before |
+//!
+//! `see_through_miss` sits in what were zero bytes before it existed: a snapshot written
+//! then reads as a map with the see-through miss off, the S-NDT it was built with.
 //!
 //! Blocks and voxels appear in canonical order (by key hash, then key), so equal maps give
 //! equal bytes whatever order they were built in, and duplicates are detectable.
@@ -23,7 +26,7 @@
 //! [`Map::read_snapshot`] and [`Map::write_snapshot`] use too: code outside the core reads
 //! a snapshot's config or frame count through it, never by byte offset.
 
-use crate::config::{to_fixed, Config, MissModel};
+use crate::config::{to_fixed, Config, MissModel, LOGODDS_ONE};
 use crate::crc::{crc32, Crc32};
 use crate::error::Error;
 use crate::key::{order, split_key, VoxelKey};
@@ -199,7 +202,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         if h.fields.classes as usize != C {
             return Err(Error::SnapshotClasses);
         }
-        if h.reserved != [0; 3] {
+        if h.reserved != [0] {
             return Err(Error::SnapshotCorrupt);
         }
         Ok(h)
@@ -350,7 +353,7 @@ impl SnapshotHeader {
     /// ```
     pub fn read(bytes: &[u8]) -> Result<SnapshotHeader, Error> {
         let raw = RawHeader::decode(bytes)?;
-        if raw.reserved != [0; 3] {
+        if raw.reserved != [0] {
             return Err(Error::SnapshotCorrupt);
         }
         let mut h = raw.fields;
@@ -446,16 +449,11 @@ impl SnapshotHeader {
             MissModel::NdtOm => 0u8,
             MissModel::Constant => 1u8,
         };
-        w.put(&[
-            c.quant_bits,
-            c.top_k,
-            c.min_score,
-            model,
-            c.votes_per_frame,
-            0,
-            0,
-            0,
-        ]);
+        // Exact: `validate` wants a multiple of 1/1024 in [-30, 0].
+        let see = (c.see_through_miss * LOGODDS_ONE) as i16;
+        w.put(&[c.quant_bits, c.top_k, c.min_score, model, c.votes_per_frame]);
+        w.put(&see.to_le_bytes());
+        w.put(&[0]);
         w.put(&self.frames.to_le_bytes());
         w.put(&self.blocks.to_le_bytes());
         w.put(&self.voxels.to_le_bytes());
@@ -469,8 +467,8 @@ struct RawHeader {
     fields: SnapshotHeader,
     /// The stored miss model byte.
     model: u8,
-    /// The bytes after the config, which must be zero.
-    reserved: [u8; 3],
+    /// The byte after the config, which must be zero.
+    reserved: [u8; 1],
 }
 
 impl RawHeader {
@@ -488,8 +486,9 @@ impl RawHeader {
         }
         let classes = r.u16();
         let (voxel_capacity, block_capacity) = (r.u32(), r.u32());
-        let (config, model) = read_config(&mut r);
-        let reserved = r.take::<3>();
+        let (mut config, model) = read_config(&mut r);
+        config.see_through_miss = f32::from(r.i16()) / LOGODDS_ONE;
+        let reserved = r.take::<1>();
         let fields = SnapshotHeader {
             classes,
             voxel_capacity,
@@ -701,16 +700,40 @@ mod tests {
         assert!(read.is_err() || var >= 0.0, "accepted; variance {var}");
     }
 
-    /// Regression: The 3 reserved bytes of the header must be zero: junk there is rejected.
+    /// Regression: The reserved byte of the header must be zero: junk there is rejected.
     #[test]
     fn snapshot_rejects_nonzero_reserved_bytes() {
         let mut map: Map<16, 16, 1> = Map::new(Config::DEFAULT);
         map.integrate(&Isometry3::identity(), &[lp(0.05, 0.05, 1.05, 1); 4])
             .unwrap();
         let mut s = snapshot(&map);
-        s[73] = 0xAB; // reserved bytes 73..76
+        s[75] = 0xAB; // reserved byte 75 (73..75: see_through_miss)
         fix_crc(&mut s);
         let mut copy: Map<16, 16, 1> = Map::new(Config::DEFAULT);
+        assert_eq!(copy.read_snapshot(&s), Err(Error::SnapshotCorrupt));
+    }
+
+    /// `see_through_miss` is kept exactly in bytes 73..75 (i16, 1/1024 log-odds); zeros
+    /// there, as every snapshot written before the field existed has, read as the miss
+    /// turned off, and a value outside its range is refused.
+    #[test]
+    fn see_through_miss_in_the_header() {
+        let mut config = Config::DEFAULT;
+        config.see_through_miss = -2.75;
+        let mut map: Map<16, 16, 1> = Map::new(config);
+        map.integrate(&Isometry3::identity(), &[lp(0.05, 0.05, 1.05, 1); 4])
+            .unwrap();
+        let mut s = snapshot(&map);
+        assert_eq!(i16::from_le_bytes([s[73], s[74]]), -2816);
+        let mut copy: Map<16, 16, 1> = Map::new(Config::DEFAULT);
+        copy.read_snapshot(&s).unwrap();
+        assert_eq!(copy.config().see_through_miss, -2.75);
+        (s[73], s[74]) = (0, 0);
+        fix_crc(&mut s);
+        copy.read_snapshot(&s).unwrap();
+        assert_eq!(copy.config().see_through_miss, 0.0);
+        s[73] = 1; // +1/1024: a miss must not add
+        fix_crc(&mut s);
         assert_eq!(copy.read_snapshot(&s), Err(Error::SnapshotCorrupt));
     }
 

@@ -65,7 +65,7 @@ pub fn run(a: &BudgetArgs) -> Result<()> {
 /// let mut a = BudgetArgs { dataset: None, cell: 0.1, classes: 40, capacity: 4096,
 ///                          blocks: Some(512), open: Default::default(),
 ///                          stride: StrideArgs { stride: 1 }, fps: 10.0, baud: 921_600 };
-/// assert!(budget(&a).unwrap().contains("= 485504 bytes"));
+/// assert!(budget(&a).unwrap().contains("= 485512 bytes"));
 /// a.classes = 0;
 /// assert!(budget(&a).is_err());
 /// ```

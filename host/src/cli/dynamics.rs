@@ -2,7 +2,7 @@
 //! what the static scene loses, against OctoMap on the same points (docs/DYNAMICS.md).
 
 use crate::cli::labels::LabelArg;
-use crate::cli::parse::check_cell_config;
+use crate::cli::parse::check_config;
 use crate::dataset::frame::LabelSource;
 use crate::dataset::open::synthetic_options;
 use crate::dataset::synthetic::Synthetic;
@@ -11,7 +11,7 @@ use crate::eval::dynamics::{run as run_dynamics, DynamicsOptions, DynamicsReport
 use crate::output::chart::{ghost_over_time, GhostPanel};
 use crate::output::progress::progress;
 use anyhow::{bail, Context, Result};
-use sndt_core::Config;
+use sndt_core::{Config, ConfigField};
 use std::path::PathBuf;
 
 /// Arguments of `sndt dynamics`.
@@ -19,7 +19,7 @@ use std::path::PathBuf;
 #[command(after_help = "Examples:
   sndt dynamics
   sndt dynamics synthetic:dynamic --cell 0.1,0.05 --octomap target/octomap/octomap_dynamics
-  sndt dynamics synthetic:dynamic:200:60 --labels pred")]
+  sndt dynamics synthetic:dynamic:200:60 --labels pred --see-through-miss 0,-1.5,-3")]
 pub struct DynamicsArgs {
     /// The dynamic room: `synthetic:dynamic[:FRAMES[:CHANGE]]` (160 frames, the first change
     /// at frame 30; every event must fit in the walk).
@@ -41,6 +41,16 @@ pub struct DynamicsArgs {
     /// NDT-OM miss weight `lambda` (`Config::lambda`), in [0, 0.49].
     #[arg(long, default_value_t = Config::DEFAULT.lambda)]
     pub lambda: f32,
+    /// Log-odds of the see-through miss (`Config::see_through_miss`), comma-separated: one
+    /// S-NDT map per value (each in [-30, 0], a multiple of 1/1024; 0 is S-NDT as
+    /// published).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "0,-3",
+        allow_negative_numbers = true
+    )]
+    pub see_through_miss: Vec<f32>,
     /// Upper log-odds clamp (`Config::clamp_max`), in [0, 30].
     #[arg(long, default_value_t = Config::DEFAULT.clamp_max)]
     pub clamp_max: f32,
@@ -72,16 +82,29 @@ pub fn run(a: &DynamicsArgs) -> Result<()> {
     }
     let mut mappers = Vec::new();
     for &cell in &a.cell {
-        let config = Config {
-            lambda: a.lambda,
-            clamp_max: a.clamp_max,
-            ..Config::with_cell_size(cell)
-        };
-        check_cell_config(&config, cell)?;
-        mappers.push(Mapper {
-            name: "sndt".into(),
-            config,
-        });
+        for &see in &a.see_through_miss {
+            let config = Config {
+                lambda: a.lambda,
+                see_through_miss: see,
+                clamp_max: a.clamp_max,
+                ..Config::with_cell_size(cell)
+            };
+            let (cell_flag, see_flag) = (
+                format!("--cell {cell}"),
+                format!("--see-through-miss {see}"),
+            );
+            let flags = [
+                (ConfigField::CellSize, &cell_flag[..]),
+                (ConfigField::RayCells, &cell_flag),
+                (ConfigField::SeeThroughMiss, &see_flag),
+            ];
+            check_config(&config, &flags)?;
+            let name = match see {
+                0.0 => "sndt".to_string(),
+                _ => format!("sndt see-through {see}"),
+            };
+            mappers.push(Mapper { name, config });
+        }
     }
     let split = Synthetic::new(options)?;
     println!("sndt dynamics: {}", split.describe());

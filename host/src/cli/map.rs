@@ -49,6 +49,10 @@ pub struct MapArgs {
     /// About how many votes a voxel takes from one frame (1..=64; `Config::votes_per_frame`).
     #[arg(long, default_value_t = Config::DEFAULT.votes_per_frame)]
     pub votes_per_frame: u8,
+    /// Log-odds of the see-through miss that clears what moved (`Config::see_through_miss`:
+    /// in [-30, 0], a multiple of 1/1024; 0 is S-NDT as published; docs/DYNAMICS.md).
+    #[arg(long, default_value_t = Config::DEFAULT.see_through_miss, allow_negative_numbers = true)]
+    pub see_through_miss: f32,
     /// Also write each trajectory's map snapshot to `<out>/maps/<scene>_<cam>.sndt`.
     #[arg(long)]
     pub save_maps: bool,
@@ -80,11 +84,13 @@ pub fn run(a: &MapArgs) -> Result<()> {
     let labels = LabelSource::from(a.labels);
     let config = Config {
         votes_per_frame: a.votes_per_frame,
+        see_through_miss: a.see_through_miss,
         ..Config::with_cell_size(a.cell)
     };
-    let (cell, votes) = (
+    let (cell, votes, see) = (
         format!("--cell {}", a.cell),
         format!("--votes-per-frame {}", a.votes_per_frame),
+        format!("--see-through-miss {}", a.see_through_miss),
     );
     check_config(
         &config,
@@ -92,6 +98,7 @@ pub fn run(a: &MapArgs) -> Result<()> {
             (ConfigField::CellSize, &cell),
             (ConfigField::RayCells, &cell),
             (ConfigField::VotesPerFrame, &votes),
+            (ConfigField::SeeThroughMiss, &see),
         ],
     )?;
     let options = a.open.options_with(&a.predictions)?;

@@ -367,7 +367,7 @@ mod tests {
         assert_eq!(pick_capacity(1, 9000), Some((262_144, 32_768)));
         assert_eq!(pick_capacity((1 << 20) + 1, 1), None);
         let r = report(0.1, 40, 4096, 512);
-        assert!(r.contains("= 485504 bytes"), "{r}");
+        assert!(r.contains("= 485512 bytes"), "{r}");
     }
 
     #[test]

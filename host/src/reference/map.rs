@@ -457,7 +457,10 @@ impl RefMap {
         ends.sort_unstable_by_key(|&(k, truncated)| ray_order(&k, truncated));
         let origin = Vector3::new(origin32[0] as f64, origin32[1] as f64, origin32[2] as f64);
         let o = [0, 1, 2].map(|i| origin[i] / self.h);
-        let mut misses = FrameMisses::default();
+        let mut misses = FrameMisses {
+            hit: ends.iter().filter(|e| !e.1).map(|e| e.0).collect(),
+            ..FrameMisses::default()
+        };
         let mut path = Vec::new();
         for (end, truncated) in ends {
             let (ray, target) = self.ray_to(origin, end, truncated);
@@ -497,9 +500,11 @@ impl RefMap {
     }
 
     /// Step 3, per traversed voxel: its miss for `ray` unless it already had one this
-    /// frame: the NDT-OM miss with the voxel's current Gaussian where it has one, else the
-    /// constant miss. An NDT-OM miss whose closest point lies beyond the ray's end is
-    /// skipped and leaves the voxel for a later ray. Returns whether a miss was applied.
+    /// frame: with the voxel's current Gaussian where it has one, the see-through miss if
+    /// it got no points this frame (and the miss is on), else the NDT-OM miss; the
+    /// constant miss without one. A miss the ray does not give (closest point beyond the
+    /// ray's end; for the see-through miss also outside the ellipsoid or near the end)
+    /// leaves the voxel for a later ray. Returns whether a miss was applied.
     fn miss(&mut self, key: &Key, ray: &Ray, misses: &mut FrameMisses) -> bool {
         if misses.missed.contains(key) {
             return false;
@@ -512,7 +517,12 @@ impl RefMap {
                 .entry(*key)
                 .or_insert_with(|| self.prepared(key));
             if let Some((mean, inv)) = g {
-                match ndt_om_miss(&cfg, ray, &mean, &inv) {
+                let see = cfg.see_through_miss != 0.0 && !misses.hit.contains(key);
+                let miss = match see {
+                    true => see_through_miss(&cfg, ray, &mean, &inv),
+                    false => ndt_om_miss(&cfg, ray, &mean, &inv),
+                };
+                match miss {
                     Some(l) => delta = l,
                     None => return false,
                 }
@@ -603,6 +613,8 @@ struct FrameVotes {
 #[derive(Default)]
 struct FrameMisses {
     missed: KeySet,
+    /// The voxels that received points this frame.
+    hit: KeySet,
     gaussians: KeyMap<Option<(Vector3<f64>, Matrix3<f64>)>>,
 }
 
@@ -663,6 +675,31 @@ fn walk_segment(
         k[a] += step[a];
         t_next[a] += t_delta[a];
     }
+}
+
+/// The see-through miss (the core's `Config::see_through_miss`): for a ray whose closest
+/// point `x` (as in [`ndt_om_miss`]) lies within Mahalanobis radius 4 of the Gaussian and
+/// before the ray's end, with `pz < 1/2`, `see_through_miss (1 - pz)`; else `None`.
+fn see_through_miss(cfg: &Config, ray: &Ray, mu: &Vector3<f64>, inv: &Matrix3<f64>) -> Option<f64> {
+    let u = ray.dir;
+    let w = inv * u;
+    let a = u.dot(&w);
+    if a.is_nan() || a <= 0.0 {
+        return Some(cfg.miss as f64);
+    }
+    let t = w.dot(&(mu - ray.origin)) / a;
+    if t > ray.len {
+        return None;
+    }
+    let dx = ray.origin + u * t - mu;
+    let p_z = if ray.measured {
+        let sigma = cfg.noise_base as f64 + cfg.noise_quadratic as f64 * ray.len * ray.len;
+        let dz = ray.len - t;
+        (-0.5 * dz * dz / (sigma * sigma)).exp()
+    } else {
+        0.0
+    };
+    (dx.dot(&(inv * dx)) <= 16.0 && p_z < 0.5).then_some(cfg.see_through_miss as f64 * (1.0 - p_z))
 }
 
 /// NDT-OM miss log-odds (the core's miss model) for `ray` through a Gaussian with mean `mu`

@@ -29,7 +29,7 @@
 /* Bytes of a map: an 8-byte tag, then, rounded up to 8: a 112-byte header, per surface
  * voxel round_up(56 + classes, 4) bytes, and the block table (12 bytes and 180 per
  * occupancy block, rounded up to 8). */
-#define SNDT_MAP_BYTES (8 + SNDT_ROUND_UP_(112 + (size_t)SNDT_VOXELS * SNDT_ROUND_UP_(56 + SNDT_CLASSES, 4) + SNDT_ROUND_UP_(12 + (size_t)SNDT_BLOCKS * 180, 8), 8))
+#define SNDT_MAP_BYTES (8 + SNDT_ROUND_UP_(116 + (size_t)SNDT_VOXELS * SNDT_ROUND_UP_(56 + SNDT_CLASSES, 4) + SNDT_ROUND_UP_(12 + (size_t)SNDT_BLOCKS * 180, 8), 8))
 /* Alignment of a map's storage. */
 #define SNDT_MAP_ALIGN 8
 /* Most bytes a snapshot of a full map takes (sndt_snapshot_len gives the current size). */
@@ -171,6 +171,11 @@ typedef struct sndt_config {
    * Gaussian radius (Mahalanobis) that rays and renders hit. Default 2.5.
    */
   float render_radius;
+  /**
+   * Log-odds of the see-through miss that clears what moved: [-30, 0], a multiple of
+   * 1/1024; 0 (default) is S-NDT as published.
+   */
+  float see_through_miss;
 } sndt_config;
 
 /**

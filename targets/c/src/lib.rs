@@ -83,7 +83,7 @@ pub const fn header_map_bytes(voxels: usize, blocks: usize, classes: usize) -> u
 const _: () = {
     assert!(MAP_BYTES == header_map_bytes(VOXELS, BLOCKS, CLASSES));
     assert!(MAP_ALIGN == 8);
-    assert!(MAP_HEADER_BYTES == 112 && BLOCK_TABLE_BYTES == 12 && sndt_core::BLOCK_BYTES == 180);
+    assert!(MAP_HEADER_BYTES == 116 && BLOCK_TABLE_BYTES == 12 && sndt_core::BLOCK_BYTES == 180);
 };
 
 /// Opaque handle of a map: the caller's storage after `sndt_map_init`.
@@ -777,7 +777,7 @@ mod tests {
             storage_bytes::<100, 7, 254>()
         );
         assert_eq!(header_map_bytes(33, 65, 3), storage_bytes::<33, 65, 3>());
-        assert_eq!(MAP_BYTES, 485_512);
+        assert_eq!(MAP_BYTES, 485_520);
     }
 
     #[test]

@@ -105,6 +105,9 @@ pub struct sndt_config {
     pub miss_model: u8,
     /// Gaussian radius (Mahalanobis) that rays and renders hit. Default 2.5.
     pub render_radius: f32,
+    /// Log-odds of the see-through miss that clears what moved: [-30, 0], a multiple of
+    /// 1/1024; 0 (default) is S-NDT as published.
+    pub see_through_miss: f32,
 }
 
 impl sndt_config {
@@ -132,6 +135,7 @@ impl sndt_config {
             votes_per_frame: c.votes_per_frame,
             miss_model: c.miss_model as u8,
             render_radius: c.render_radius,
+            see_through_miss: c.see_through_miss,
         }
     }
 
@@ -161,6 +165,7 @@ impl sndt_config {
             votes_per_frame: self.votes_per_frame,
             miss_model,
             render_radius: self.render_radius,
+            see_through_miss: self.see_through_miss,
         };
         c.validate().map_err(|_| SNDT_ERR_CONFIG)?;
         Ok(c)

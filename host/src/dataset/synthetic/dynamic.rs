@@ -121,8 +121,8 @@ impl Objects {
         Objects {
             chair_old: chair([1.75, 3.0], CHAIR_OLD),
             chair_new: chair([4.9, 4.3], CHAIR_NEW),
-            stand: vec![b([4.05, 2.6, 0.0], [4.55, 3.05, 0.55], NIGHT_STAND, STAND)],
-            box_new: vec![b([4.12, 2.68, 0.0], [4.48, 3.0, 0.38], BOX, BOX_NEW)],
+            stand: vec![b([3.9, 3.5, 0.0], [4.4, 3.95, 0.55], NIGHT_STAND, STAND)],
+            box_new: vec![b([3.97, 3.58, 0.0], [4.33, 3.9, 0.38], BOX, BOX_NEW)],
             swing: (0..=5)
                 .map(|i| {
                     (
@@ -514,7 +514,7 @@ mod tests {
         let s = DynamicScene::new(DEFAULT_FRAMES, DEFAULT_CHANGE, false).unwrap();
         let down = [0.0, 0.0, -1.0];
         let top = |scene: &DynamicScene, f: u32| {
-            let hit = scene.at(f).cast(&[4.3, 2.8, 2.0], &down, 10.0).unwrap();
+            let hit = scene.at(f).cast(&[4.15, 3.75, 2.0], &down, 10.0).unwrap();
             (2.0 - hit.t, hit.label)
         };
         let (z, label) = top(&s, DEFAULT_CHANGE - 1);
