@@ -77,7 +77,7 @@ pub struct Config {
     /// structure's former voxel only from the rare ray that crosses its footprint: a moved
     /// chair stayed occupied for over 100 frames. On the dynamic synthetic room at 10 cm
     /// (`sndt dynamics --see-through-miss 0,-3`, docs/DYNAMICS.md) -3 clears a moved chair,
-    /// an opened door, a passing person and a cart in 2 to 5 frames where OctoMap takes 10
+    /// an opened door, a passing person and a cart in 2 to 6 frames where OctoMap takes 10
     /// to 11, but it also costs the default synthetic split about 1 point of mIoU with
     /// ground-truth labels (rays past the edges of surfaces that got no points in a frame),
     /// which is why it is not on by default yet.
