@@ -169,3 +169,33 @@ def test_every_public_name_has_a_docstring_and_a_stub():
             if not attr.startswith("_"):
                 assert value.__doc__, f"{cls.__name__}.{attr}"
                 assert f"def {attr}" in stub or f"{attr}:" in stub, f"{cls.__name__}.{attr}"
+
+
+@pytest.mark.parametrize("see_through_miss", [0.0, -3.0])
+def test_a_wall_that_moves_back(see_through_miss):
+    # A wall 2.02 m ahead, at the log-odds clamp (3.5) after six frames, then 1 m farther.
+    # With the see-through miss at -3 the rays to the new wall cross the old wall's flat
+    # Gaussians and end far behind them: 3.5 - 3 = 0.5 after one frame (still occupied),
+    # the lower clamp after two (free). As published (0, the default), NDT-OM's miss is at
+    # most -0.41 a frame: occupied after both.
+    m = sndt.Map(cell=0.1, see_through_miss=see_through_miss)
+    assert m.config["see_through_miss"] == see_through_miss
+    old = np.array([[0.0, 0.0, 2.02]])
+    for _ in range(6):
+        depth, labels, k, pose = wall_frame(z=2.02, label=7)
+        m.integrate(depth, labels, intrinsics=k, pose=pose)
+    depth, labels, k, pose = wall_frame(z=3.02, label=7)
+    m.integrate(depth, labels, intrinsics=k, pose=pose)
+    assert m.occupancy(old).tolist() == [sndt.OCCUPIED]
+    m.integrate(depth, labels, intrinsics=k, pose=pose)
+    moved = sndt.FREE if see_through_miss < 0 else sndt.OCCUPIED
+    assert m.occupancy(old).tolist() == [moved]
+
+
+def test_see_through_miss_is_checked_and_the_dynamic_room_opens():
+    with pytest.raises(sndt.ConfigError, match="see_through_miss"):
+        sndt.Map(cell=0.1, see_through_miss=-1.4)  # not a multiple of 1/1024
+    room = sndt.open_dataset("synthetic:dynamic:111")
+    assert len(room) == 1 and room.frames == 111
+    with pytest.raises(Exception, match="at least 111"):
+        sndt.open_dataset("synthetic:dynamic:100")

@@ -300,3 +300,54 @@ fn core_matches_reference_within_tolerances_at_10cm() {
     assert!(dmiou.abs() <= 0.2, "|dmIoU| = {dmiou} points > 0.2");
     assert!(dinvr.abs() <= 0.1, "|dinvR| = {dinvr} points > 0.1");
 }
+
+/// The see-through miss by hand: frame 2's ray passes A's Gaussian (Mahalanobis^2 about
+/// 1.1, see `ndt_om_miss_by_hand`) and ends 1.1 m beyond it (`pz` < 1e-6), and A gets no
+/// point in frame 2: it takes `see_through_miss (1 - pz)` instead of NDT-OM's miss.
+#[test]
+fn see_through_miss_by_hand() {
+    let config = Config {
+        see_through_miss: -1.0,
+        ..Config::DEFAULT
+    };
+    let (r, core) = two_frames(config, &six_points(), [0.09, 0.09, 2.15]);
+    let want = config.hit as f64 - 1.0;
+    close(r.log_odds(&[0, 0, 10]), want, 1e-5, "reference A");
+    close(core_log_odds(&core, [0, 0, 10]), want, 2e-3, "core A");
+    // Voxels without a Gaussian still get the constant miss.
+    close(
+        r.log_odds(&[0, 0, 15]),
+        config.miss as f64,
+        1e-12,
+        "behind A",
+    );
+}
+
+/// The core and the f64 reference agree with the see-through miss on, on the dynamic
+/// room (everything moves once; small camera, 10 cm).
+#[test]
+fn core_matches_reference_with_the_see_through_miss_on_the_dynamic_room() {
+    use sndt_host::dataset::synthetic::{dynamic, DynamicOptions, SynthOptions, Synthetic};
+    let split = Synthetic::new(SynthOptions {
+        dynamic: Some(DynamicOptions::default()),
+        frames: dynamic::DEFAULT_FRAMES,
+        camera: sndt_tests::SMALL_CAMERA,
+        predictions: false,
+        ..SynthOptions::default()
+    })
+    .unwrap();
+    let frames: Vec<_> = split
+        .frames()
+        .iter()
+        .step_by(2)
+        .map(|id| split.load(id).unwrap())
+        .collect();
+    let config = Config {
+        see_through_miss: -3.0,
+        ..Config::with_cell_size(0.1)
+    };
+    let r = compare(&frames, &config, &Options::default()).unwrap();
+    assert_eq!((r.only_core, r.only_ref, r.count_mismatch), (0, 0, 0));
+    let occ = r.occupancy.fraction();
+    assert!(occ >= 0.995, "occupancy agreement {occ} < 99.5 %");
+}

@@ -677,19 +677,26 @@ fn walk_segment(
     }
 }
 
-/// The see-through miss (the core's `Config::see_through_miss`): for a ray whose closest
-/// point `x` (as in [`ndt_om_miss`]) lies within Mahalanobis radius 4 of the Gaussian and
-/// before the ray's end, with `pz < 1/2`, `see_through_miss (1 - pz)`; else `None`.
-fn see_through_miss(cfg: &Config, ray: &Ray, mu: &Vector3<f64>, inv: &Matrix3<f64>) -> Option<f64> {
+/// Where `ray` passes a Gaussian (mean `mu`, inverse covariance `inv`): the squared
+/// Mahalanobis distance of its closest point and `pz` there (see [`ndt_om_miss`]).
+/// `Err(())` when `inv` gives no direction, `Ok(None)` when the closest point lies beyond
+/// the ray's end.
+#[allow(clippy::result_unit_err)]
+fn closest_approach(
+    cfg: &Config,
+    ray: &Ray,
+    mu: &Vector3<f64>,
+    inv: &Matrix3<f64>,
+) -> Result<Option<(f64, f64)>, ()> {
     let u = ray.dir;
     let w = inv * u;
     let a = u.dot(&w);
     if a.is_nan() || a <= 0.0 {
-        return Some(cfg.miss as f64);
+        return Err(());
     }
     let t = w.dot(&(mu - ray.origin)) / a;
     if t > ray.len {
-        return None;
+        return Ok(None);
     }
     let dx = ray.origin + u * t - mu;
     let p_z = if ray.measured {
@@ -699,7 +706,20 @@ fn see_through_miss(cfg: &Config, ray: &Ray, mu: &Vector3<f64>, inv: &Matrix3<f6
     } else {
         0.0
     };
-    (dx.dot(&(inv * dx)) <= 16.0 && p_z < 0.5).then_some(cfg.see_through_miss as f64 * (1.0 - p_z))
+    Ok(Some((dx.dot(&(inv * dx)), p_z)))
+}
+
+/// The see-through miss (the core's `Config::see_through_miss`): for a ray whose closest
+/// point lies within Mahalanobis radius 4 of the Gaussian and before the ray's end, with
+/// `pz < 1/2`, `see_through_miss (1 - pz)`; else `None`.
+fn see_through_miss(cfg: &Config, ray: &Ray, mu: &Vector3<f64>, inv: &Matrix3<f64>) -> Option<f64> {
+    match closest_approach(cfg, ray, mu, inv) {
+        Err(()) => Some(cfg.miss as f64),
+        Ok(Some((d2, p_z))) => {
+            (d2 <= 16.0 && p_z < 0.5).then_some(cfg.see_through_miss as f64 * (1.0 - p_z))
+        }
+        Ok(None) => None,
+    }
 }
 
 /// NDT-OM miss log-odds (the core's miss model) for `ray` through a Gaussian with mean `mu`
@@ -710,25 +730,12 @@ fn see_through_miss(cfg: &Config, ray: &Ray, mu: &Vector3<f64>, inv: &Matrix3<f6
 /// `sigma = noise_base + noise_quadratic r^2` at the ray's length `r` (0 for a truncated
 /// ray), `p = 0.5 - lambda pN (1 - pz)`, miss = `logit(p)`.
 fn ndt_om_miss(cfg: &Config, ray: &Ray, mu: &Vector3<f64>, inv: &Matrix3<f64>) -> Option<f64> {
-    let u = ray.dir;
-    let w = inv * u;
-    let a = u.dot(&w);
-    if a.is_nan() || a <= 0.0 {
-        return Some(cfg.miss as f64);
-    }
-    let t = w.dot(&(mu - ray.origin)) / a;
-    if t > ray.len {
-        return None;
-    }
-    let dx = ray.origin + u * t - mu;
-    let p_n = (-0.5 * dx.dot(&(inv * dx))).exp();
-    let p_z = if ray.measured {
-        let sigma = cfg.noise_base as f64 + cfg.noise_quadratic as f64 * ray.len * ray.len;
-        let dz = ray.len - t;
-        (-0.5 * dz * dz / (sigma * sigma)).exp()
-    } else {
-        0.0
+    let (d2, p_z) = match closest_approach(cfg, ray, mu, inv) {
+        Err(()) => return Some(cfg.miss as f64),
+        Ok(None) => return None,
+        Ok(Some(found)) => found,
     };
+    let p_n = (-0.5 * d2).exp();
     let p = 0.5 - cfg.lambda as f64 * p_n * (1.0 - p_z);
     Some((p / (1.0 - p)).ln())
 }
