@@ -139,6 +139,11 @@ typedef struct sndt_config {
    */
   float lambda;
   /**
+   * Log-odds of the see-through miss that clears what moved: [-30, 0], a multiple of
+   * 1/1024; 0 (default) is S-NDT as published.
+   */
+  float see_through_miss;
+  /**
    * Range noise sigma = noise_base + noise_quadratic * r^2, metres. Default 0.02.
    */
   float noise_base;
@@ -171,11 +176,6 @@ typedef struct sndt_config {
    * Gaussian radius (Mahalanobis) that rays and renders hit. Default 2.5.
    */
   float render_radius;
-  /**
-   * Log-odds of the see-through miss that clears what moved: [-30, 0], a multiple of
-   * 1/1024; 0 (default) is S-NDT as published.
-   */
-  float see_through_miss;
 } sndt_config;
 
 /**

@@ -88,6 +88,9 @@ pub struct sndt_config {
     pub clamp_max: f32,
     /// NDT-OM miss weight. Default 0.1.
     pub lambda: f32,
+    /// Log-odds of the see-through miss that clears what moved: [-30, 0], a multiple of
+    /// 1/1024; 0 (default) is S-NDT as published.
+    pub see_through_miss: f32,
     /// Range noise sigma = noise_base + noise_quadratic * r^2, metres. Default 0.02.
     pub noise_base: f32,
     /// Default 0.0025.
@@ -105,9 +108,6 @@ pub struct sndt_config {
     pub miss_model: u8,
     /// Gaussian radius (Mahalanobis) that rays and renders hit. Default 2.5.
     pub render_radius: f32,
-    /// Log-odds of the see-through miss that clears what moved: [-30, 0], a multiple of
-    /// 1/1024; 0 (default) is S-NDT as published.
-    pub see_through_miss: f32,
 }
 
 impl sndt_config {
