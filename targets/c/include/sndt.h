@@ -26,7 +26,7 @@
 #define SNDT_CLASSES 40
 #endif
 #define SNDT_ROUND_UP_(x, a) ((((x) + (a) - 1) / (a)) * (a))
-/* Bytes of a map: an 8-byte tag, then, rounded up to 8: a 112-byte header, per surface
+/* Bytes of a map: an 8-byte tag, then, rounded up to 8: a 116-byte header, per surface
  * voxel round_up(56 + classes, 4) bytes, and the block table (12 bytes and 180 per
  * occupancy block, rounded up to 8). */
 #define SNDT_MAP_BYTES (8 + SNDT_ROUND_UP_(116 + (size_t)SNDT_VOXELS * SNDT_ROUND_UP_(56 + SNDT_CLASSES, 4) + SNDT_ROUND_UP_(12 + (size_t)SNDT_BLOCKS * 180, 8), 8))
