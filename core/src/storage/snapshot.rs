@@ -786,8 +786,7 @@ mod tests {
         assert_eq!(edited(4, 9), Err(Error::SnapshotVersion));
         assert_eq!(edited(71, 7), Err(Error::SnapshotCorrupt)); // miss model
         assert_eq!(edited(75, 1), Err(Error::SnapshotCorrupt)); // reserved
-        // see_through_miss, i16 in bytes 73..75: 0xF400 = -3072 / 1024.
-        let see = edited(74, 0xF4).map(|h| h.config.see_through_miss);
+        let see = edited(74, 0xF4).map(|h| h.config.see_through_miss); // i16 0xF400 / 1024
         assert_eq!(see, Ok(-3.0));
         assert_eq!(edited(68, 0).map(|h| h.config.quant_bits), Ok(0));
         assert_eq!(edited(6, 40).map(|h| h.classes), Ok(40));

@@ -17,7 +17,7 @@ use std::path::PathBuf;
 /// Arguments of `sndt dynamics`.
 #[derive(clap::Args, Clone, Debug)]
 #[command(after_help = "Examples:
-  sndt dynamics
+  sndt dynamics synthetic:dynamic --camera-scale 0.5
   sndt dynamics synthetic:dynamic --cell 0.1,0.05 --octomap target/octomap/octomap_dynamics
   sndt dynamics synthetic:dynamic:200:60 --labels pred --see-through-miss 0,-1.5,-3")]
 pub struct DynamicsArgs {
