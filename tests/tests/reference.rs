@@ -323,6 +323,64 @@ fn see_through_miss_by_hand() {
     );
 }
 
+/// The see-through miss spares a confirmed surface's outline: A, at the upper clamp after
+/// five frames of points, is passed by a ray through the outer shell of its Gaussian
+/// (Mahalanobis^2 8.8 by the formula of `ndt_om_miss_by_hand`, between 2^2 and 4^2) and
+/// keeps its clamp. A ray through its middle (Mahalanobis^2 about 1.1) takes it to
+/// 3.5 - 3 = 0.5, more than 1 below the clamp: doubted, so the outer-shell ray now counts,
+/// 0.5 - 3 clamped to -2.
+#[test]
+fn see_through_miss_needs_the_middle_of_a_confirmed_surface() {
+    let config = Config {
+        see_through_miss: -3.0,
+        ..Config::DEFAULT
+    };
+    let (outline, middle) = ([0.18f32, 0.1024, 2.15], [0.09f32, 0.09, 2.15]);
+    // The outer-shell ray, by hand: t* = u^T Sinv mu / u^T Sinv u, x = t* u.
+    let z = outline.map(|x| x as f64);
+    let len = (z[0] * z[0] + z[1] * z[1] + z[2] * z[2]).sqrt();
+    let u = z.map(|x| x / len);
+    let (mu, inv) = (
+        [0.05, 0.05, 1.05],
+        [5.0 / 0.0008, 5.0 / 0.0002, 5.0 / 0.0018],
+    );
+    let a: f64 = (0..3).map(|i| u[i] * inv[i] * u[i]).sum();
+    let t = (0..3).map(|i| u[i] * inv[i] * mu[i]).sum::<f64>() / a;
+    let m2: f64 = (0..3).map(|i| (t * u[i] - mu[i]).powi(2) * inv[i]).sum();
+    assert!(m2 > 8.0 && m2 < 9.5, "Mahalanobis^2 {m2}");
+    let mut r = RefMap::new(config, 40);
+    let mut core: Box<SmallMap> = sndt_host::mapping::boxed_map(config).unwrap();
+    for _ in 0..4 {
+        r.integrate(&Isometry3::identity(), &pts(&six_points(), 1))
+            .unwrap();
+        core.integrate(&Isometry3::identity(), &pts(&six_points(), 1))
+            .unwrap();
+    }
+    let mut run = |frame: Vec<LabeledPoint>, want: f64, what: &str| {
+        r.integrate(&Isometry3::identity(), &frame).unwrap();
+        core.integrate(&Isometry3::identity(), &frame).unwrap();
+        close(r.log_odds(&[0, 0, 10]), want, 1e-5, what);
+        close(core_log_odds(&core, [0, 0, 10]), want, 2e-3, what);
+    };
+    // 5 x 0.85 > 3.5.
+    run(
+        pts(&six_points(), 1),
+        3.5,
+        "five frames of points: the clamp",
+    );
+    run(pts(&[outline], 2), 3.5, "outline ray, confirmed: no miss");
+    run(
+        pts(&[middle], 2),
+        0.5,
+        "middle ray: 3.5 - 3 (1 - pz), pz < 1e-6",
+    );
+    run(
+        pts(&[outline], 2),
+        -2.0,
+        "outline ray, doubted: 0.5 - 3, clamped",
+    );
+}
+
 /// The core and the f64 reference agree with the see-through miss on, on the dynamic
 /// room (everything moves once; small camera, 10 cm).
 #[test]

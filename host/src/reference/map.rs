@@ -518,8 +518,11 @@ impl RefMap {
                 .or_insert_with(|| self.prepared(key));
             if let Some((mean, inv)) = g {
                 let see = cfg.see_through_miss != 0.0 && !misses.hit.contains(key);
+                // Doubted: more than 1 below the upper clamp (the core's
+                // `SEE_THROUGH_DOUBT`, compared in its fixed point).
+                let doubted = self.log_odds(key) < cfg.clamp_max as f64 - 1.0;
                 let miss = match see {
-                    true => see_through_miss(&cfg, ray, &mean, &inv),
+                    true => see_through_miss(&cfg, ray, &mean, &inv, doubted),
                     false => ndt_om_miss(&cfg, ray, &mean, &inv),
                 };
                 match miss {
@@ -710,13 +713,21 @@ fn closest_approach(
 }
 
 /// The see-through miss (the core's `Config::see_through_miss`): for a ray whose closest
-/// point lies within Mahalanobis radius 4 of the Gaussian and before the ray's end, with
-/// `pz < 1/2`, `see_through_miss (1 - pz)`; else `None`.
-fn see_through_miss(cfg: &Config, ray: &Ray, mu: &Vector3<f64>, inv: &Matrix3<f64>) -> Option<f64> {
+/// point lies within Mahalanobis radius 2 of the Gaussian (4 for a `doubted` voxel, more
+/// than 1 below the upper clamp) and before the ray's end, with `pz < 1/2`,
+/// `see_through_miss (1 - pz)`; else `None`.
+fn see_through_miss(
+    cfg: &Config,
+    ray: &Ray,
+    mu: &Vector3<f64>,
+    inv: &Matrix3<f64>,
+    doubted: bool,
+) -> Option<f64> {
+    let r2 = if doubted { 16.0 } else { 4.0 };
     match closest_approach(cfg, ray, mu, inv) {
         Err(()) => Some(cfg.miss as f64),
         Ok(Some((d2, p_z))) => {
-            (d2 <= 16.0 && p_z < 0.5).then_some(cfg.see_through_miss as f64 * (1.0 - p_z))
+            (d2 <= r2 && p_z < 0.5).then_some(cfg.see_through_miss as f64 * (1.0 - p_z))
         }
         Ok(None) => None,
     }
