@@ -152,7 +152,11 @@ fn constant_miss_by_hand() {
 
 #[test]
 fn ndt_om_miss_by_hand() {
-    let config = Config::DEFAULT;
+    // NDT-OM as published: no see-through miss.
+    let config = Config {
+        see_through_miss: 0.0,
+        ..Config::DEFAULT
+    };
     let p2 = [0.09f32, 0.09, 2.15];
     let (r, core) = two_frames(config, &six_points(), p2);
     // The ray: from s = 0 to the mean of the end voxel's single point, z = p2.

@@ -759,7 +759,11 @@ mod tests {
     #[test]
     fn ndt_om_miss_hand_computed() {
         let h = 0.125f32;
-        let cfg = Config::with_cell_size(h);
+        // NDT-OM as published: no see-through miss.
+        let cfg = Config {
+            see_through_miss: 0.0,
+            ..Config::with_cell_size(h)
+        };
         let mut map: Map<64, 64, 2> = Map::try_new(cfg).unwrap();
         let o = [0.0625f32, 0.0625, 0.0];
         let pose = at(o[0], o[1], o[2]);

@@ -76,6 +76,11 @@ pub struct ExperimentArgs {
     /// `Config::votes_per_frame`).
     #[arg(long, default_value_t = Config::DEFAULT.votes_per_frame)]
     pub votes_per_frame: u8,
+    /// S-NDT: log-odds of the see-through miss that clears what moved
+    /// (`Config::see_through_miss`: in [-30, 0], a multiple of 1/1024; 0 is S-NDT as
+    /// published; docs/DYNAMICS.md).
+    #[arg(long, default_value_t = Config::DEFAULT.see_through_miss, allow_negative_numbers = true)]
+    pub see_through_miss: f32,
     /// Which frames to map.
     #[command(flatten)]
     pub every: EveryArgs,
@@ -108,6 +113,7 @@ impl ExperimentArgs {
             methods: self.methods.iter().map(|&m| m.into()).collect(),
             free_resolution: self.free_resolution,
             votes_per_frame: self.votes_per_frame,
+            see_through_miss: self.see_through_miss,
         }
     }
 

@@ -27,6 +27,8 @@ pub struct ExperimentOptions {
     /// S-NDT votes a voxel takes per frame ([`Config::votes_per_frame`]; default
     /// [`Config::DEFAULT`]'s).
     pub votes_per_frame: u8,
+    /// S-NDT see-through miss ([`Config::see_through_miss`]; default [`Config::DEFAULT`]'s).
+    pub see_through_miss: f32,
 }
 
 impl Default for ExperimentOptions {
@@ -40,6 +42,7 @@ impl Default for ExperimentOptions {
             methods: vec![Method::Sndt, Method::Sbki, Method::Osbki],
             free_resolution: None,
             votes_per_frame: Config::DEFAULT.votes_per_frame,
+            see_through_miss: Config::DEFAULT.see_through_miss,
         }
     }
 }
@@ -195,6 +198,7 @@ fn cell_maps(
 ) -> Result<Vec<MapConfig>> {
     let sndt = Config {
         votes_per_frame: options.votes_per_frame,
+        see_through_miss: options.see_through_miss,
         ..Config::with_cell_size(cell)
     };
     sndt.validate()

@@ -40,6 +40,7 @@ pub fn manifest(plan: &Plan, dataset: &dyn Dataset, provenance: &Manifest) -> Ma
         ("--methods", methods.join(",")),
         ("--free-resolution", free),
         ("--votes-per-frame", options.votes_per_frame.to_string()),
+        ("--see-through-miss", options.see_through_miss.to_string()),
         ("frames", frames_run(dataset)),
         ("sndt version", env!("CARGO_PKG_VERSION").to_string()),
     ]
