@@ -176,8 +176,8 @@ def test_a_wall_that_moves_back(see_through_miss):
     # A wall 2.02 m ahead, at the log-odds clamp (3.5) after six frames, then 1 m farther.
     # With the see-through miss at -3 the rays to the new wall cross the old wall's flat
     # Gaussians and end far behind them: 3.5 - 3 = 0.5 after one frame (still occupied),
-    # the lower clamp after two (free). As published (0, the default), NDT-OM's miss is at
-    # most -0.41 a frame: occupied after both.
+    # the lower clamp after two (free). As published (0; the default is -3), NDT-OM's miss
+    # is at most -0.41 a frame: occupied after both.
     m = sndt.Map(cell=0.1, see_through_miss=see_through_miss)
     assert m.config["see_through_miss"] == see_through_miss
     old = np.array([[0.0, 0.0, 2.02]])
@@ -193,6 +193,7 @@ def test_a_wall_that_moves_back(see_through_miss):
 
 
 def test_see_through_miss_is_checked_and_the_dynamic_room_opens():
+    assert sndt.Map(cell=0.1).config["see_through_miss"] == -3.0  # the core's default
     with pytest.raises(sndt.ConfigError, match="see_through_miss"):
         sndt.Map(cell=0.1, see_through_miss=-1.4)  # not a multiple of 1/1024
     room = sndt.open_dataset("synthetic:dynamic:111")

@@ -100,7 +100,7 @@ pub fn run(a: &DynamicsArgs) -> Result<()> {
             ];
             check_config(&config, &flags)?;
             let name = match see {
-                0.0 => "sndt".to_string(),
+                0.0 => "sndt published".to_string(),
                 _ => format!("sndt see-through {see}"),
             };
             mappers.push(Mapper { name, config });
