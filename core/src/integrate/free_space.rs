@@ -477,12 +477,11 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         }
     }
 
-    /// The miss (fixed point) of voxel `key` (cell `cell` of the block in slot `bs`), on the surface, for
-    /// the segment `seg`: for a valid Gaussian the see-through miss when the voxel got no
-    /// points this frame (`hit` false) and [`Config::see_through_miss`] is on, else the
-    /// NDT-OM miss; the
-    /// constant miss without a valid Gaussian; `None` when the ray ends before its closest
-    /// approach (or, for the see-through miss, near it). Out of line on 32-bit targets: few
+    /// The miss (fixed point) of voxel `key` (cell `cell` of the block in slot `bs`), on
+    /// the surface, for the segment `seg`: for a valid Gaussian the see-through miss when
+    /// the voxel got no points this frame (`hit` false) and [`Config::see_through_miss`] is
+    /// on, else the NDT-OM miss; the constant miss without a valid Gaussian; `None` when
+    /// the ray ends before its closest approach (or, for the see-through miss, near it). Out of line on 32-bit targets: few
     /// misses need it, and its floating point would make every miss save registers.
     #[cfg_attr(target_pointer_width = "64", inline(always))]
     #[cfg_attr(not(target_pointer_width = "64"), inline(never))]
@@ -568,17 +567,18 @@ fn see_through_miss(cfg: &Config, ray: &Ray, g: &Prepared, doubted: bool) -> Opt
 }
 /// The Mahalanobis radius of the ellipsoid a ray must pass through to see through a
 /// surface voxel at its clamp: 2, through the patch its points cover. Rays through the
-/// ellipsoid's outer shell pass beside the surface, not through it: with 4 (or 3, or 2.5)
-/// for every voxel, the far edges of thin objects the camera could not see for a while
-/// (clothes on a chair behind its backrest) went free, and the default synthetic split
-/// lost 0.96 (0.73, 0.67) points of mIoU at a see-through miss of -3; with 2 it loses
+/// ellipsoid's outer shell pass beside the surface, not through it: with 4 (or 3) for
+/// every voxel, the far edges of thin objects the camera could not see for a while
+/// (clothes on a chair behind its backrest) went free, and the default synthetic split at
+/// 10 cm lost 0.96 (0.73) points of mIoU at a see-through miss of -3; with 2 it loses
 /// 0.07, but a moved chair's outline, which few of a frame's rays (one per end voxel)
-/// pierce, stays for 96 frames.
+/// pierce, stays for 96 frames (dynamic room, half-size camera).
 const SEE_THROUGH_SURFACE: f32 = 2.0;
 
 /// The radius for a voxel already doubted (see [`SEE_THROUGH_DOUBT`]): 4. Once a ray has
 /// pierced a moved object's surface, rays past its outline finish it: the chair clears in
-/// 14 frames instead of 96, and the static split loses 0.14 points instead of 0.07.
+/// 29 frames instead of 96 (14 at full size), and the static split loses 0.14 points
+/// instead of 0.07 (2.5 until doubted: 0.67).
 const SEE_THROUGH_HALO: f32 = 4.0;
 
 /// A voxel is doubted when its log-odds lie more than this below `clamp_max`: a static
