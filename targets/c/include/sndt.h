@@ -140,7 +140,7 @@ typedef struct sndt_config {
   float lambda;
   /**
    * Log-odds of the see-through miss that clears what moved: [-30, 0], a multiple of
-   * 1/1024. Default -3; 0 is S-NDT as published.
+   * 1/1024. Default -3. 0 is S-NDT as published.
    */
   float see_through_miss;
   /**

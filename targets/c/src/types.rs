@@ -89,7 +89,7 @@ pub struct sndt_config {
     /// NDT-OM miss weight. Default 0.1.
     pub lambda: f32,
     /// Log-odds of the see-through miss that clears what moved: [-30, 0], a multiple of
-    /// 1/1024. Default -3; 0 is S-NDT as published.
+    /// 1/1024. Default -3. 0 is S-NDT as published.
     pub see_through_miss: f32,
     /// Range noise sigma = noise_base + noise_quadratic * r^2, metres. Default 0.02.
     pub noise_base: f32,
