@@ -20,13 +20,7 @@ step "liboctomap-dev, g++ and pkg-config"
 ensure_octomap
 
 step "OctoMap's side: octomap_dynamics.cpp against liboctomap ($TOOL)"
-mkdir -p "$(dirname "$TOOL")"
-if [ ! -x "$TOOL" ] || [ scripts/octomap/octomap_dynamics.cpp -nt "$TOOL" ]; then
-    # shellcheck disable=SC2046 # pkg-config prints several flags
-    g++ -O2 -std=c++17 -Wall -Wextra -Werror -o "$TOOL" scripts/octomap/octomap_dynamics.cpp \
-        $(pkg-config --cflags --libs octomap)
-fi
-echo "built"
+build_octomap_program scripts/octomap/octomap_dynamics.cpp "$TOOL"
 
 if [ "${1:-}" = "--full" ]; then
     step "the report at full size, 10 and 5 cm (out/dynamics)"

@@ -28,13 +28,7 @@ ensure_ros_venv "$VENV"
 
 
 step "the checker: check_octomap.cpp against liboctomap ($CHECK)"
-mkdir -p "$(dirname "$CHECK")"
-if [ ! -x "$CHECK" ] || [ scripts/octomap/check_octomap.cpp -nt "$CHECK" ]; then
-    # shellcheck disable=SC2046 # pkg-config prints several flags
-    g++ -O1 -std=c++17 -Wall -Wextra -Werror -o "$CHECK" scripts/octomap/check_octomap.cpp \
-        $(pkg-config --cflags --libs octomap)
-fi
-echo "built"
+build_octomap_program scripts/octomap/check_octomap.cpp "$CHECK"
 
 step "a synthetic map at $CELL m and its exports (.bt, .ot, map bag)"
 # The dev profile shares its build with the rest of the test command (see scripts/ros.sh).

@@ -83,6 +83,18 @@ ensure_octomap() {
     echo "octomap $(pkg-config --modversion octomap), $(g++ --version | head -n 1)"
 }
 
+# build_octomap_program SOURCE PROGRAM: compiles the C++ file SOURCE against liboctomap
+# (warnings are errors) into PROGRAM, unless PROGRAM is newer than SOURCE.
+build_octomap_program() {
+    local src=$1 program=$2
+    mkdir -p "$(dirname "$program")"
+    if [ ! -x "$program" ] || [ "$src" -nt "$program" ]; then
+        # shellcheck disable=SC2046 # pkg-config prints several flags
+        g++ -O2 -std=c++17 -Wall -Wextra -Werror -o "$program" "$src" $(pkg-config --cflags --libs octomap)
+    fi
+    echo "built $program"
+}
+
 # venv_install VENV REQUIREMENT...: the venv VENV (python3-venv installed when python3
 # cannot make one) with the pip requirements installed in it.
 venv_install() {

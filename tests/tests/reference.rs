@@ -127,6 +127,15 @@ fn core_log_odds(core: &SmallMap, k: [i16; 3]) -> f64 {
     }) as f64
 }
 
+/// A's log-odds after `two_frames` is `want` in the reference (to 1e-5) and the core (its
+/// 1/1024 fixed point), and the voxel behind A, which has no Gaussian, got the constant
+/// `miss`.
+fn check_a_and_behind(r: &RefMap, core: &SmallMap, want: f64, miss: f32) {
+    close(r.log_odds(&[0, 0, 10]), want, 1e-5, "reference A");
+    close(core_log_odds(core, [0, 0, 10]), want, 2e-3, "core A");
+    close(r.log_odds(&[0, 0, 15]), miss as f64, 1e-12, "behind A");
+}
+
 #[test]
 fn constant_miss_by_hand() {
     let mut config = Config::DEFAULT;
@@ -183,15 +192,7 @@ fn ndt_om_miss_by_hand() {
     );
     let want = config.hit as f64 + miss;
     // f32 inputs and config values: agreement to ~1e-6.
-    close(r.log_odds(&[0, 0, 10]), want, 1e-5, "reference A");
-    close(core_log_odds(&core, [0, 0, 10]), want, 2e-3, "core A");
-    // Voxels without a Gaussian still get the constant miss.
-    close(
-        r.log_odds(&[0, 0, 15]),
-        config.miss as f64,
-        1e-12,
-        "behind A",
-    );
+    check_a_and_behind(&r, &core, want, config.miss);
 }
 
 #[test]
@@ -316,15 +317,7 @@ fn see_through_miss_by_hand() {
     };
     let (r, core) = two_frames(config, &six_points(), [0.09, 0.09, 2.15]);
     let want = config.hit as f64 - 1.0;
-    close(r.log_odds(&[0, 0, 10]), want, 1e-5, "reference A");
-    close(core_log_odds(&core, [0, 0, 10]), want, 2e-3, "core A");
-    // Voxels without a Gaussian still get the constant miss.
-    close(
-        r.log_odds(&[0, 0, 15]),
-        config.miss as f64,
-        1e-12,
-        "behind A",
-    );
+    check_a_and_behind(&r, &core, want, config.miss);
 }
 
 /// The see-through miss spares a confirmed surface's outline: A, at the upper clamp after
