@@ -454,12 +454,12 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         (block, cell): (u64, u32),
         bs: usize,
     ) {
-        let Some((surface, hit)) = self.blocks.get(bs).map(|b| (b.surface, b.hit)) else {
+        let Some(surface) = self.blocks.get(bs).map(|b| b.surface) else {
             return;
         };
         let delta = if has_cell(surface, cell) && self.config.miss_model == MissModel::NdtOm {
             let key = VoxelKey::from_block_cell(block, cell);
-            match self.surface_miss(f, cache, seg, (key, bs, cell), has_cell(hit, cell)) {
+            match self.surface_miss(f, cache, seg, (key, bs, cell)) {
                 Some(delta) => delta,
                 None => return,
             }
@@ -479,7 +479,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
 
     /// The miss (fixed point) of voxel `key` (cell `cell` of the block in slot `bs`), on
     /// the surface, for the segment `seg`: for a valid Gaussian the see-through miss when
-    /// the voxel got no points this frame (`hit` false) and [`Config::see_through_miss`] is
+    /// the voxel got no points this frame (not in its block's `hit` mask) and [`Config::see_through_miss`] is
     /// on, else the NDT-OM miss; the constant miss without a valid Gaussian; `None` when
     /// the ray ends before its closest approach (or, for the see-through miss, near it). Out of line on 32-bit targets: few
     /// misses need it, and its floating point would make every miss save registers.
@@ -491,20 +491,19 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         cache: &mut GaussCache,
         seg: &Segment,
         (key, bs, cell): (VoxelKey, usize, u32),
-        hit: bool,
     ) -> Option<i32> {
         let cfg = &self.config;
         let found = self.voxels.find(key.packed());
         match found.and_then(|vs| Some((vs, self.voxels.get(vs)?))) {
             Some((vs, v)) if v.n >= cfg.n_min => {
                 let g = cache.get(vs, || v.prepared(cfg));
+                // The block is read here, not in every miss: few misses reach a Gaussian.
+                let block = self.blocks.get(bs);
+                let hit = block.is_none_or(|b| has_cell(b.hit, cell));
                 if hit || cfg.see_through_miss == 0.0 {
                     ndt_om_miss(cfg, &seg.ray(f), &g).map(to_fixed)
                 } else {
-                    let l = self
-                        .blocks
-                        .get(bs)
-                        .map_or(0, |b| i32::from(b.cells[cell as usize & 63]));
+                    let l = block.map_or(0, |b| i32::from(b.cells[cell as usize & 63]));
                     let doubted = l < f.clamp.1 - to_fixed(SEE_THROUGH_DOUBT);
                     see_through_miss(cfg, &seg.ray(f), &g, doubted).map(to_fixed)
                 }
