@@ -67,21 +67,25 @@ pub struct Config {
     /// exactly). Default -3; 0 is S-NDT as published, where every surface voxel gets the
     /// NDT-OM miss.
     ///
-    /// A surface voxel that received no points in a frame, crossed by a ray that passes
-    /// through the middle of its Gaussian (Mahalanobis radius 2) and ends well beyond it
-    /// (the measured end more than about 1.2 range-noise sigmas past the ray's closest
-    /// approach, `p_z < 1/2`), gets `see_through_miss * (1 - p_z)` instead of the NDT-OM
-    /// miss. Once its log-odds lie more than 1 below `clamp_max` (doubted), a ray through
-    /// its Gaussian's 4-sigma ellipsoid is enough. Other rays give it no miss and leave it
-    /// to the frame's next ray; voxels that received points keep the NDT-OM miss, which
-    /// protects thin surfaces from grazing rays. At -3 a voxel at the clamp (3.5) needs two
-    /// frames of such evidence to turn free.
+    /// A surface voxel that received no points in a frame and is crossed by one of its
+    /// rays gets `see_through_miss` when the frame is a depth image
+    /// ([`crate::Map::integrate_depth`]) whose pixel at the projection of the voxel's mean
+    /// measured more than a cell plus twice the range noise beyond the mean: the camera
+    /// looked through the middle of the old surface. Otherwise (and for point frames) it
+    /// gets `see_through_miss * (1 - p_z)` from a ray that passes through the middle of
+    /// its Gaussian (Mahalanobis radius 2) and ends well beyond it (the measured end more
+    /// than about 1.2 range-noise sigmas past the ray's closest approach, `p_z < 1/2`);
+    /// once its log-odds lie more than 1 below `clamp_max` (doubted), a ray through its
+    /// Gaussian's 4-sigma ellipsoid is enough. Other rays give it no miss and leave it to
+    /// the frame's next ray; voxels that received points keep the NDT-OM miss, which
+    /// protects thin surfaces from grazing rays. At -3 a voxel at the clamp (3.5) needs
+    /// two frames of such evidence to turn free.
     ///
     /// NDT-OM's miss is at most `logit(0.5 - lambda)` (-0.41 at the default `lambda`) and
     /// reaches a thin structure's former voxel only from the rare ray that crosses its
     /// footprint: as published, a moved chair stays occupied for the whole 160-frame walk
-    /// of the dynamic synthetic room. At -3 it clears in 14 frames, an opened door in 2, a
-    /// passing person in 14 and a cart in 4, for 0.14 points of mIoU on the default
+    /// of the dynamic synthetic room. At -3 it clears in 2 frames, as do an opened door
+    /// (2), a passing person (3) and a cart (4), for 0.14 points of mIoU on the default
     /// synthetic split at 10 cm with ground-truth labels (0.05 with predicted ones):
     /// `sndt dynamics`, docs/DYNAMICS.md.
     pub see_through_miss: f32,

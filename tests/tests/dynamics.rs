@@ -70,9 +70,14 @@ fn see_through_miss_clears_what_moved_and_keeps_the_static_scene() {
             p.name
         );
     }
-    // The moved chair: published NDT-OM misses reach its thin former voxels only from the
-    // rare ray through them, and it stays all the walk; the see-through miss clears it
-    // (21 frames with this 160 x 120 camera: few rays pierce its outline).
-    let chair = |m: &sndt_host::eval::dynamics::MapperResult| frames(m.events[0].frames_to_clear);
-    assert!(chair(see) <= 30 && chair(published) > 150, "{table}");
+    // The moved chair and the person: published NDT-OM misses reach their thin former
+    // voxels only from the rare ray through them, and they stay all the walk; with the
+    // see-through miss the pixels through their Gaussians' means see the floor and the
+    // wall behind, and they clear in the two frames a clamped voxel needs, give or take
+    // one (OctoMap takes 10 and 11, docs/DYNAMICS.md).
+    for (event, name) in [(0, "chair"), (3, "person")] {
+        let clear =
+            |m: &sndt_host::eval::dynamics::MapperResult| frames(m.events[event].frames_to_clear);
+        assert!(clear(see) <= 3 && clear(published) > 150, "{name}: {table}");
+    }
 }

@@ -406,3 +406,66 @@ fn core_matches_reference_with_the_see_through_miss_on_the_dynamic_room() {
     let occ = r.occupancy.fraction();
     assert!(occ >= 0.995, "occupancy agreement {occ} < 99.5 %");
 }
+
+/// The see-through test of a depth image, by hand. A, at the upper clamp after five
+/// frames of `six_points`, gets no points in a 3x3 image of a wall (fx = fy = 10, principal
+/// point at the centre, planar depth `d` everywhere). The only ray through A runs along
+/// its corner edge x = y = 0 (Mahalanobis^2 78 by the formula of
+/// `see_through_miss_needs_the_middle_of_a_confirmed_surface`): no miss by the ray rule.
+/// A's mean (0.05, 0.05, 1.05) projects to u = v = 10 * 0.05 / 1.05 + 1.5 = 1.98, the
+/// centre pixel. At d = 2.15 that pixel saw beyond the mean by more than a cell plus twice
+/// the range noise there (1.05 + 0.1 + 2 (0.02 + 0.0025 * 1.05^2) = 1.196): A takes the
+/// full see-through miss, 3.5 - 3. At d = 1.18 (beyond by more than a cell, less than
+/// the noise margin) A keeps its clamp; so it does with the same points and no image.
+#[test]
+fn depth_image_sees_through_the_mean_by_hand() {
+    use sndt_core::{depth_point, Depth, DepthImage, DepthKind, LabelImage};
+    let config = Config {
+        see_through_miss: -3.0,
+        ..Config::DEFAULT
+    };
+    let camera = Pinhole {
+        fx: 10.0,
+        fy: 10.0,
+        cx: 1.5,
+        cy: 1.5,
+        width: 3,
+        height: 3,
+    };
+    for (d, with_image, want) in [(2.15f32, true, 0.5), (1.18, true, 3.5), (2.15, false, 3.5)] {
+        let mut r = RefMap::new(config, 40);
+        let mut core: Box<SmallMap> = sndt_host::mapping::boxed_map(config).unwrap();
+        for _ in 0..5 {
+            r.integrate(&Isometry3::identity(), &pts(&six_points(), 1))
+                .unwrap();
+            core.integrate(&Isometry3::identity(), &pts(&six_points(), 1))
+                .unwrap();
+        }
+        close(r.log_odds(&[0, 0, 10]), 3.5, 1e-9, "the clamp");
+        let depth = [d; 9];
+        let labels = [2u8; 9];
+        let image = DepthImage {
+            camera,
+            depth: Depth::Metres(&depth),
+            kind: DepthKind::Planar,
+            labels: LabelImage::Top1(&labels),
+            stride: 1,
+        };
+        let points: Vec<[f32; 3]> = (0..3)
+            .flat_map(|row| (0..3).map(move |col| (col, row)))
+            .map(|(col, row)| depth_point(camera.ray(col, row), d, DepthKind::Planar).unwrap())
+            .collect();
+        let pose = Isometry3::identity();
+        if with_image {
+            r.integrate_seen(&pose, &pts(&points, 2), Some(&image))
+                .unwrap();
+            core.integrate_depth(&pose, &image).unwrap();
+        } else {
+            r.integrate(&pose, &pts(&points, 2)).unwrap();
+            core.integrate(&pose, &pts(&points, 2)).unwrap();
+        }
+        let what = format!("depth {d}, image {with_image}");
+        close(r.log_odds(&[0, 0, 10]), want, 1e-5, &what);
+        close(core_log_odds(&core, [0, 0, 10]), want, 2e-3, &what);
+    }
+}

@@ -228,6 +228,31 @@ impl PixelRays {
 }
 
 impl DepthImage<'_> {
+    /// The sensor-frame point [`crate::Map::integrate_depth`] takes from pixel `(col, row)`,
+    /// bit for bit, or `None` for no return or a pixel outside the image. (Its rays use
+    /// reciprocals of the focal lengths, which can differ from [`Pinhole::ray`] in the
+    /// last bit.)
+    ///
+    /// ```
+    /// use sndt_core::*;
+    /// let cam = Pinhole { fx: 4.0, fy: 4.0, cx: 1.0, cy: 1.0, width: 2, height: 2 };
+    /// let depth = [2.0f32, 0.0, 2.0, 2.0];
+    /// let img = DepthImage { camera: cam, depth: Depth::Metres(&depth), kind: DepthKind::Planar,
+    ///                        labels: LabelImage::None, stride: 1 };
+    /// assert_eq!(img.point(0, 0), Some([-0.25, -0.25, 2.0]));
+    /// assert_eq!((img.point(1, 0), img.point(2, 0)), (None, None));
+    /// ```
+    pub fn point(&self, col: u32, row: u32) -> Option<[f32; 3]> {
+        let cam = &self.camera;
+        if col >= cam.width || row >= cam.height {
+            return None;
+        }
+        let rays = PixelRays::new(cam);
+        let i = row as usize * cam.width as usize + col as usize;
+        let ray = [rays.x(col as usize), rays.y(row as usize), 1.0];
+        depth_point(ray, self.depth.metres(i)?, self.kind)
+    }
+
     /// Checks the image against its camera: a valid camera, a pixel count that fits
     /// `usize`, depth and labels of that size, and a stride of at least 1.
     pub(crate) fn validate(&self) -> Result<(), Error> {

@@ -7,7 +7,7 @@
 
 use crate::config::to_fixed;
 use crate::error::Error;
-use crate::geometry::camera::validate_pose;
+use crate::geometry::camera::{validate_pose, DepthImage};
 use crate::key::{axis_key, floor_i32, VoxelKey, KEY_LIMIT};
 use crate::storage::block::Block;
 use crate::storage::map::Map;
@@ -231,6 +231,8 @@ pub(crate) struct FrameState<'s> {
     pub(crate) evicted_before: (u64, u64),
     /// Where evicted entries go as records, if the caller gave a sink.
     pub(crate) sink: Option<&'s mut dyn RecordSink>,
+    /// A depth frame's image: phase 3 looks up where a surface voxel's mean projects.
+    pub(crate) image: Option<DepthImage<'s>>,
 }
 
 impl FrameState<'_> {
@@ -319,6 +321,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             report: FrameReport::default(),
             evicted_before: (self.stats.voxels_evicted, self.stats.blocks_evicted),
             sink: None,
+            image: None,
         })
     }
 

@@ -6,9 +6,13 @@
 //! order. Every voxel a ray traverses (exact 3-D DDA) gets at most one miss per frame. With
 //! [`MissModel::NdtOm`] a voxel with a valid Gaussian gets a miss weighted by how close the
 //! ray passes to the Gaussian, and none when the ray ends before its closest approach, so
-//! grazing rays do not erase thin surfaces.
+//! grazing rays do not erase thin surfaces. With [`Config::see_through_miss`] on, a
+//! surface voxel that got no points this frame takes that stronger miss from a ray through
+//! the middle of its Gaussian, or, in a depth frame, when the pixel its mean projects to
+//! saw beyond it.
 
 use crate::config::{to_fixed, Config, MissModel};
+use crate::geometry::camera::{DepthImage, DepthKind};
 use crate::geometry::dda::{lane_keys, traverse, Dda, LANES, LANE_STEPS};
 use crate::geometry::gaussian::{PrepCache, Prepared};
 use crate::geometry::sqrt::sqrt;
@@ -479,10 +483,12 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
 
     /// The miss (fixed point) of voxel `key` (cell `cell` of the block in slot `bs`), on
     /// the surface, for the segment `seg`: for a valid Gaussian the see-through miss when
-    /// the voxel got no points this frame (not in its block's `hit` mask) and [`Config::see_through_miss`] is
-    /// on, else the NDT-OM miss; the constant miss without a valid Gaussian; `None` when
-    /// the ray ends before its closest approach (or, for the see-through miss, near it). Out of line on 32-bit targets: few
-    /// misses need it, and its floating point would make every miss save registers.
+    /// the voxel got no points this frame (not in its block's `hit` mask) and
+    /// [`Config::see_through_miss`] is on (in full when a depth frame saw through its mean,
+    /// [`seen_through`]), else the NDT-OM miss; the constant miss without a valid
+    /// Gaussian; `None` when the ray ends before its closest approach (or, for the
+    /// see-through miss, near it). Out of line on 32-bit targets: few misses need it, and
+    /// its floating point would make every miss save registers.
     #[cfg_attr(target_pointer_width = "64", inline(always))]
     #[cfg_attr(not(target_pointer_width = "64"), inline(never))]
     fn surface_miss(
@@ -503,6 +509,12 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 if hit || cfg.see_through_miss == 0.0 {
                     ndt_om_miss(cfg, &seg.ray(f), &g).map(to_fixed)
                 } else {
+                    if f.image
+                        .as_ref()
+                        .is_some_and(|i| seen_through(cfg, f, i, &g.mean))
+                    {
+                        return Some(to_fixed(cfg.see_through_miss));
+                    }
                     let l = block.map_or(0, |b| i32::from(b.cells[cell as usize & 63]));
                     let doubted = l < f.clamp.1 - to_fixed(SEE_THROUGH_DOUBT);
                     see_through_miss(cfg, &seg.ray(f), &g, doubted).map(to_fixed)
@@ -599,6 +611,48 @@ fn ndt_om_miss(cfg: &Config, ray: &Ray, g: &Prepared) -> Option<f32> {
     let p_n = libm::expf(-0.5 * dx.dot(&(g.inv * dx)));
     let p = 0.5 - cfg.lambda * p_n * (1.0 - p_z);
     Some(libm::logf(p / (1.0 - p)))
+}
+
+/// Whether a depth frame saw through the point `mean` (world metres): the pixel `mean`
+/// projects to (the sampled one at or before it, with the image's stride) measured a depth
+/// beyond it by more than a cell plus twice the range noise there. That pixel looked at
+/// the middle of the voxel's surface and found it gone; a frame's rays (one per end voxel)
+/// are too sparse to pierce a thin Gaussian's middle often: with this test a moved chair
+/// clears in 2 frames, not 14. A surface still there gives the pixel its own depth (a
+/// plane through the mean meets the pixel's ray at the mean), one hidden behind something
+/// gives a nearer depth: neither passes.
+fn seen_through(cfg: &Config, f: &FrameState, image: &DepthImage<'_>, mean: &Vector3<f32>) -> bool {
+    let d = [
+        mean.x - f.origin[0],
+        mean.y - f.origin[1],
+        mean.z - f.origin[2],
+    ];
+    // Camera coordinates: the transpose of the pose's rotation.
+    let m = &f.rot;
+    let p: [f32; 3] =
+        core::array::from_fn(|i| m[(0, i)] * d[0] + m[(1, i)] * d[1] + m[(2, i)] * d[2]);
+    if p[2].is_nan() || p[2] <= 0.0 {
+        return false;
+    }
+    let cam = &image.camera;
+    let u = cam.fx * p[0] / p[2] + cam.cx;
+    let v = cam.fy * p[1] / p[2] + cam.cy;
+    // False for NaN too.
+    let inside = u >= 0.0 && v >= 0.0 && u < cam.width as f32 && v < cam.height as f32;
+    if !inside {
+        return false;
+    }
+    let s = image.stride.max(1) as usize;
+    let (col, row) = (u as usize / s * s, v as usize / s * s);
+    let Some(measured) = image.depth.metres(row * cam.width as usize + col) else {
+        return false;
+    };
+    let along = match image.kind {
+        DepthKind::Planar => p[2],
+        DepthKind::Range => sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]),
+    };
+    let sigma = cfg.noise_base + cfg.noise_quadratic * along * along;
+    measured.is_finite() && measured > along + cfg.cell_size + 2.0 * sigma
 }
 
 /// Whether bit `cell` (0..64) of a block mask is set; on 32-bit targets a test of one

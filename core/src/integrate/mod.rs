@@ -184,12 +184,12 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     /// The steps of [`Map::integrate_depth`], with an observer and a sink.
-    fn integrate_depth_image(
+    fn integrate_depth_image<'s>(
         &mut self,
         pose: &Isometry3<f32>,
-        image: &DepthImage<'_>,
+        image: &DepthImage<'s>,
         mut on_phase: impl FnMut(Phase),
-        sink: Option<&mut dyn RecordSink>,
+        sink: Option<&'s mut dyn RecordSink>,
     ) -> Result<FrameReport, Error> {
         image.validate()?;
         if image.samples() > MAX_FRAME_POINTS {
@@ -197,6 +197,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         }
         let mut f = self.begin_frame(pose)?;
         f.sink = sink;
+        f.image = Some(*image);
         let rays = PixelRays::new(&image.camera);
         let mut batch = Batch::new();
         let stride = image.stride as usize;

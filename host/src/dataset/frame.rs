@@ -12,7 +12,8 @@
 
 use anyhow::{bail, Context, Result};
 use sndt_core::{
-    depth_point, validate_pose, DepthKind, Isometry3, LabeledPoint, Labels, Pinhole, Point3,
+    depth_point, validate_pose, Depth, DepthImage, DepthKind, Isometry3, LabelImage, LabeledPoint,
+    Labels, Pinhole, Point3,
 };
 use std::fmt;
 use std::sync::Arc;
@@ -211,6 +212,47 @@ impl Frame {
                 }
             }
         }
+    }
+
+    /// The frame's depth without labels as the core's [`DepthImage`], every `stride`-th
+    /// pixel, for a pinhole frame (`None` for per-pixel rays): what the see-through test
+    /// of the f64 reference consults beside the frame's points.
+    pub fn depth_view(&self, stride: u32) -> Option<DepthImage<'_>> {
+        match self.rays.as_ref() {
+            Rays::Pinhole(camera) => Some(DepthImage {
+                camera: *camera,
+                depth: Depth::Metres(&self.depth),
+                kind: self.depth_kind,
+                labels: LabelImage::None,
+                stride: stride.max(1),
+            }),
+            Rays::PerPixel { .. } => None,
+        }
+    }
+
+    /// The points integration takes from the frame, with labels from `source`, every
+    /// `stride`-th pixel: a pinhole frame's exactly as the core's depth path computes them
+    /// ([`DepthImage::point`]), else [`Frame::camera_points`]. What the f64 reference gets
+    /// beside [`Frame::depth_view`], so that it sees the core's input bit for bit.
+    pub fn integration_points(&self, source: LabelSource, stride: u32) -> Vec<LabeledPoint> {
+        let Some(view) = self.depth_view(stride) else {
+            return self.camera_points(source, stride);
+        };
+        let s = stride.max(1) as usize;
+        let (w, h) = (view.camera.width, view.camera.height);
+        let mut out = Vec::with_capacity(self.pixels() / (s * s));
+        for row in (0..h).step_by(s) {
+            for col in (0..w).step_by(s) {
+                if let Some(p) = view.point(col, row) {
+                    let i = row as usize * w as usize + col as usize;
+                    out.push(LabeledPoint::new(
+                        Point3::from(p),
+                        self.point_labels(i, source),
+                    ));
+                }
+            }
+        }
+        out
     }
 
     /// Planar depth image (0 where there is no measurement), as the evaluation's GT mask

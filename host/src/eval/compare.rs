@@ -24,7 +24,7 @@
 use crate::dataset::frame::{Frame, LabelSource, Rays};
 
 use crate::eval::metrics::{Confusion, Metrics, MAX_GT_DEPTH};
-use crate::mapping::{boxed_map, HostMap, SemanticMap};
+use crate::mapping::{boxed_map, integrate_frame, HostMap, SemanticMap};
 use crate::reference::key::Key;
 use crate::reference::map::RefMap;
 use anyhow::{anyhow, Result};
@@ -347,8 +347,10 @@ pub fn compare_cells<'f>(
     })
 }
 
-/// Integrates every frame into both maps of every pair, the same sensor-frame points into
-/// each (the core's point path, so both maps see identical input), timing each side.
+/// Integrates every frame into both maps of every pair, timing each side: the core as the
+/// evaluation feeds it ([`integrate_frame`]: a pinhole frame as its depth image), the
+/// reference the same frame's points and, for a pinhole frame, its depth image for the
+/// see-through test.
 /// Returns the points integrated per map.
 fn integrate_all<'f>(
     pairs: &mut [Pair],
@@ -360,22 +362,25 @@ fn integrate_all<'f>(
     let mut points_total = 0u64;
     for i in 0..count {
         let frame = load(i)?;
-        let points = frame.camera_points(options.labels, options.stride);
+        let points = frame.integration_points(options.labels, options.stride);
+        let view = frame.depth_view(options.stride);
         points_total += points.len() as u64;
         pairs.par_iter_mut().try_for_each(|p| -> Result<()> {
             let (core, reference) = rayon::join(
                 || {
                     let t = Instant::now();
-                    let r = p.core.integrate(&frame.pose, &points);
+                    let r = integrate_frame(&mut p.core, &frame, options.labels, options.stride);
                     (r, t.elapsed().as_secs_f64())
                 },
                 || {
                     let t = Instant::now();
-                    let r = p.reference.integrate(&frame.pose, &points);
+                    let r = p
+                        .reference
+                        .integrate_seen(&frame.pose, &points, view.as_ref());
                     (r, t.elapsed().as_secs_f64())
                 },
             );
-            core.0.map_err(|e| anyhow!("{}: core: {e:?}", frame.id))?;
+            core.0.map_err(|e| anyhow!("{}: core: {e:#}", frame.id))?;
             reference
                 .0
                 .map_err(|e| anyhow!("{}: reference: {e:?}", frame.id))?;

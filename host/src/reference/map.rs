@@ -7,7 +7,8 @@ use crate::reference::render::{RefHit, RenderIndex, Renderable};
 use anyhow::anyhow;
 use nalgebra::{Matrix3, Vector3};
 use sndt_core::{
-    Config, Error, Isometry3, LabeledPoint, MissModel, Occupancy, KEY_LIMIT, MAX_TOP_K,
+    Config, DepthImage, DepthKind, Error, Isometry3, LabeledPoint, MissModel, Occupancy, KEY_LIMIT,
+    MAX_TOP_K,
 };
 
 /// One surface voxel of the reference: exact `f64` point statistics and class votes.
@@ -296,6 +297,19 @@ impl RefMap {
         pose: &Isometry3<f32>,
         points: &[LabeledPoint],
     ) -> Result<RefFrameReport, Error> {
+        self.integrate_seen(pose, points, None)
+    }
+
+    /// [`RefMap::integrate`] for the points of a depth image, which the see-through miss
+    /// also consults: a surface voxel that got no points is seen through when the pixel
+    /// its mean projects to measured well beyond the mean (the core's
+    /// `Map::integrate_depth`). `points` are the image's points.
+    pub fn integrate_seen(
+        &mut self,
+        pose: &Isometry3<f32>,
+        points: &[LabeledPoint],
+        image: Option<&DepthImage<'_>>,
+    ) -> Result<RefFrameReport, Error> {
         let (origin, origin_key) = self.validate_pose(pose)?;
         let mut report = RefFrameReport::default();
         let (votes, far) = self.accumulate_points(pose, points, &mut report);
@@ -306,7 +320,8 @@ impl RefMap {
                 .filter(|k| !votes.contains_key(*k))
                 .map(|k| (*k, true)),
         );
-        self.free_space(origin, origin_key, ends, &mut report);
+        let view = image.map(|image| View::new(pose, image));
+        self.free_space(origin, origin_key, ends, view.as_ref(), &mut report);
         self.frames += 1;
         Ok(report)
     }
@@ -452,6 +467,7 @@ impl RefMap {
         origin32: [f32; 3],
         origin_key: Key,
         mut ends: Vec<(Key, bool)>,
+        view: Option<&View<'_>>,
         report: &mut RefFrameReport,
     ) {
         ends.sort_unstable_by_key(|&(k, truncated)| ray_order(&k, truncated));
@@ -468,7 +484,7 @@ impl RefMap {
             path.clear();
             walk_segment(o, target, origin_key, end, truncated, &mut path);
             for key in &path {
-                if self.miss(key, &ray, &mut misses) {
+                if self.miss(key, &ray, view, &mut misses) {
                     report.misses += 1;
                 }
             }
@@ -505,7 +521,13 @@ impl RefMap {
     /// constant miss without one. A miss the ray does not give (closest point beyond the
     /// ray's end; for the see-through miss also outside the ellipsoid or near the end)
     /// leaves the voxel for a later ray. Returns whether a miss was applied.
-    fn miss(&mut self, key: &Key, ray: &Ray, misses: &mut FrameMisses) -> bool {
+    fn miss(
+        &mut self,
+        key: &Key,
+        ray: &Ray,
+        view: Option<&View<'_>>,
+        misses: &mut FrameMisses,
+    ) -> bool {
         if misses.missed.contains(key) {
             return false;
         }
@@ -521,9 +543,11 @@ impl RefMap {
                 // Doubted: more than 1 below the upper clamp (the core's
                 // `SEE_THROUGH_DOUBT`, compared in its fixed point).
                 let doubted = self.log_odds(key) < cfg.clamp_max as f64 - 1.0;
-                let miss = match see {
-                    true => see_through_miss(&cfg, ray, &mean, &inv, doubted),
-                    false => ndt_om_miss(&cfg, ray, &mean, &inv),
+                let seen = see && view.is_some_and(|v| v.sees_beyond(&cfg, &mean));
+                let miss = match (see, seen) {
+                    (true, true) => Some(cfg.see_through_miss as f64),
+                    (true, false) => see_through_miss(&cfg, ray, &mean, &inv, doubted),
+                    (false, _) => ndt_om_miss(&cfg, ray, &mean, &inv),
                 };
                 match miss {
                     Some(l) => delta = l,
@@ -559,8 +583,8 @@ impl RefMap {
     }
 }
 
-/// The reference as the evaluation runs it: frames as sensor-frame points (as
-/// [`crate::eval::compare`] feeds the core), one read-out.
+/// The reference as the evaluation runs it: frames as sensor-frame points with the depth
+/// image of a pinhole frame (as [`crate::eval::compare`] feeds it), one read-out.
 impl SemanticMap for RefMap {
     type Readout = ();
 
@@ -570,8 +594,8 @@ impl SemanticMap for RefMap {
         labels: LabelSource,
         stride: u32,
     ) -> anyhow::Result<()> {
-        let points = frame.camera_points(labels, stride);
-        self.integrate(&frame.pose, &points)
+        let points = frame.integration_points(labels, stride);
+        self.integrate_seen(&frame.pose, &points, frame.depth_view(stride).as_ref())
             .map(|_| ())
             .map_err(|e| anyhow!("{}: reference: {e:?}", frame.id))
     }
@@ -591,6 +615,50 @@ impl SemanticMap for RefMap {
     /// Surface voxels (those holding point statistics).
     fn voxel_count(&self) -> usize {
         self.len()
+    }
+}
+
+/// A frame's depth image as step 3 consults it: the image and the world-to-camera pose.
+struct View<'a> {
+    image: &'a DepthImage<'a>,
+    to_camera: Isometry3<f64>,
+}
+
+impl<'a> View<'a> {
+    fn new(pose: &Isometry3<f32>, image: &'a DepthImage<'a>) -> View<'a> {
+        View {
+            image,
+            to_camera: pose.cast::<f64>().inverse(),
+        }
+    }
+
+    /// Whether the pixel that world point `p` projects to (the sampled pixel at or
+    /// before it, with the image's stride) measured a depth beyond `p` by more than a
+    /// cell plus twice the range noise there: the camera saw through `p`.
+    fn sees_beyond(&self, cfg: &Config, p: &Vector3<f64>) -> bool {
+        let c = self.to_camera * nalgebra::Point3::from(*p);
+        let cam = &self.image.camera;
+        if c.z <= 0.0 {
+            return false;
+        }
+        let u = cam.fx as f64 * c.x / c.z + cam.cx as f64;
+        let v = cam.fy as f64 * c.y / c.z + cam.cy as f64;
+        if !(u >= 0.0 && v >= 0.0 && u < cam.width as f64 && v < cam.height as f64) {
+            return false;
+        }
+        let s = self.image.stride.max(1) as usize;
+        let (col, row) = (u as usize / s * s, v as usize / s * s);
+        let Some(measured) = self.image.depth.metres(row * cam.width as usize + col) else {
+            return false;
+        };
+        let along = match self.image.kind {
+            DepthKind::Planar => c.z,
+            DepthKind::Range => c.coords.norm(),
+        };
+        let sigma = cfg.noise_base as f64 + cfg.noise_quadratic as f64 * along * along;
+        measured.is_finite()
+            && measured > 0.0
+            && measured as f64 > along + cfg.cell_size as f64 + 2.0 * sigma
     }
 }
 
