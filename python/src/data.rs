@@ -52,8 +52,9 @@ pub struct PyFrame {
 
 /// Opens ``path``: a prepared-layout or raw Hypersim directory, a ROS 2 bag (``.mcap``
 /// file or rosbag2 folder), or ``synthetic``, ``synthetic:SCENES:FRAMES``,
-/// ``synthetic:floor[:WALK[:FRAMES]]``, ``synthetic:dynamic[:FRAMES[:CHANGE]]`` (rendered on
-/// the fly) — what ``sndt map`` takes.
+/// ``synthetic:floor[:WALK[:FRAMES]]``, ``synthetic:dynamic[:FRAMES[:CHANGE]]``,
+/// ``synthetic:floor-people[:WALK[:FRAMES]]`` (rendered on the fly) — what ``sndt map``
+/// takes.
 /// Keywords as its options: ``split`` (prepared layout, default ``"test"``),
 /// ``predictions`` (directory of ESANet ``.npy`` files), ``world_frame`` (bags, default
 /// ``"world"``), ``every`` (every n-th frame of each trajectory).

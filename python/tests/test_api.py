@@ -200,3 +200,7 @@ def test_see_through_miss_is_checked_and_the_dynamic_room_opens():
     assert len(room) == 1 and room.frames == 111
     with pytest.raises(Exception, match="at least 111"):
         sndt.open_dataset("synthetic:dynamic:100")
+    walk = sndt.open_dataset("synthetic:floor-people:1:300")
+    assert len(walk) == 1 and walk.frames == 300
+    with pytest.raises(Exception, match="give at least"):
+        sndt.open_dataset("synthetic:floor-people:1:6")

@@ -3,7 +3,7 @@
 
 use sndt_core::Config;
 use sndt_host::dataset::synthetic::{dynamic, DynamicOptions, SynthOptions, Synthetic};
-use sndt_host::dataset::LabelSource;
+use sndt_host::dataset::{Dataset, LabelSource};
 use sndt_host::eval::dynamics::{run, DynamicsOptions, Mapper};
 use sndt_tests::SMALL_CAMERA;
 
@@ -80,4 +80,71 @@ fn see_through_miss_clears_what_moved_and_keeps_the_static_scene() {
             |m: &sndt_host::eval::dynamics::MapperResult| frames(m.events[event].frames_to_clear);
         assert!(clear(see) <= 3 && clear(published) > 150, "{name}: {table}");
     }
+}
+
+/// The floor walk with people in the corridor: every person adds person pixels to the
+/// ground truth of some frame while it crosses (against the frozen twin, whose rooms hold
+/// their own standing figures; the renderer's labels, not the view test that chose its
+/// start), never stands within 0.5 m of the camera, and is gone once vacated; the frozen
+/// twin has no walking person at any frame; a walk too short for the people is refused
+/// with the frames it needs.
+#[test]
+fn floor_walk_with_people_in_the_corridor() {
+    use sndt_host::dataset::synthetic::scenes::class::PERSON;
+    use sndt_host::dataset::synthetic::{floor, people};
+    let walk = |frozen| {
+        Synthetic::new(SynthOptions {
+            dynamic: Some(DynamicOptions {
+                floor_walk: Some(1),
+                frozen,
+                ..DynamicOptions::default()
+            }),
+            frames: floor::DEFAULT_FRAMES,
+            camera: SMALL_CAMERA,
+            predictions: false,
+            ..SynthOptions::default()
+        })
+        .unwrap()
+    };
+    let (split, frozen) = (walk(false), walk(true));
+    let scene = split.dynamic_scene().unwrap();
+    let still = frozen.dynamic_scene().unwrap();
+    assert_eq!(
+        (scene.name, scene.events.len()),
+        (people::NAME, people::PEOPLE)
+    );
+    let persons = |s: &Synthetic, f: u32| {
+        let (frame, _) = s.render_frame(&s.frames()[f as usize]).unwrap();
+        let labels = frame.labels.unwrap();
+        labels.iter().filter(|&&l| l == PERSON).count()
+    };
+    for e in &scene.events {
+        assert!(e.first < e.vacated && (e.vacated as usize) < scene.frames);
+        let walker = |p: &&sndt_host::dataset::synthetic::geometry::Primitive| e.old.contains(*p);
+        let mut shown = (e.first..e.vacated)
+            .step_by(3)
+            .filter(|&f| persons(&split, f) > persons(&frozen, f));
+        assert!(shown.next().is_some(), "{}: never in view", e.name);
+        for f in e.first..e.vacated {
+            let eye = scene.pose(f).translation.vector;
+            let now = scene.primitives_at(f);
+            let near = now.iter().filter(walker).any(|p| {
+                let b = p.shape.aabb();
+                (0..2).all(|a| b.min[a] - 0.5 < eye[a] && eye[a] < b.max[a] + 0.5)
+            });
+            assert!(!near, "{}: within 0.5 m of the camera at frame {f}", e.name);
+            assert_eq!(still.primitives_at(f).iter().filter(walker).count(), 0);
+        }
+        assert_eq!(
+            scene.primitives_at(e.vacated).iter().filter(walker).count(),
+            0
+        );
+    }
+    for spec in ["synthetic:floor-people:1:300", "synthetic:floor-people:2"] {
+        let d = sndt_host::dataset::open_spec(spec, &Default::default()).unwrap();
+        assert!(d.describe().contains("3 people in the corridor"), "{spec}");
+    }
+    let short = sndt_host::dataset::open_spec("synthetic:floor-people:1:6", &Default::default());
+    let err = format!("{:#}", short.err().unwrap());
+    assert!(err.contains("give at least"), "{err}");
 }

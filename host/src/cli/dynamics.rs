@@ -19,10 +19,12 @@ use std::path::PathBuf;
 #[command(after_help = "Examples:
   sndt dynamics synthetic:dynamic --camera-scale 0.5
   sndt dynamics synthetic:dynamic --cell 0.1,0.05 --octomap target/octomap/octomap_dynamics
-  sndt dynamics synthetic:dynamic:200:60 --labels pred --see-through-miss 0,-1.5,-3")]
+  sndt dynamics synthetic:dynamic:200:60 --labels pred --see-through-miss 0,-1.5,-3
+  sndt dynamics synthetic:floor-people --camera-scale 0.25")]
 pub struct DynamicsArgs {
-    /// The dynamic room: `synthetic:dynamic[:FRAMES[:CHANGE]]` (160 frames, the first change
-    /// at frame 30; every event must fit in the walk).
+    /// The dynamic room, `synthetic:dynamic[:FRAMES[:CHANGE]]` (160 frames, the first change
+    /// at frame 30; every event must fit in the walk), or the floor walk with people in the
+    /// corridor, `synthetic:floor-people[:WALK[:FRAMES]]` (1,000 frames).
     #[arg(default_value = "synthetic:dynamic")]
     pub dataset: String,
     /// Voxel edges in metres, comma-separated.
@@ -64,7 +66,8 @@ pub struct DynamicsArgs {
 pub fn run(a: &DynamicsArgs) -> Result<()> {
     let Some(options) = synthetic_options(&a.dataset) else {
         bail!(
-            "{}: the dynamics report runs on the dynamic room, synthetic:dynamic[:FRAMES[:CHANGE]]",
+            "{}: the dynamics report runs on the dynamic room, synthetic:dynamic[:FRAMES[:CHANGE]], \
+             or the floor walk with people, synthetic:floor-people[:WALK[:FRAMES]]",
             a.dataset
         );
     };
@@ -72,7 +75,8 @@ pub fn run(a: &DynamicsArgs) -> Result<()> {
     options.camera = scaled(&options.camera, a.camera_scale)?;
     if options.dynamic.is_none_or(|d| d.frozen) {
         bail!(
-            "{}: the dynamics report runs on the dynamic room, synthetic:dynamic[:FRAMES[:CHANGE]]",
+            "{}: the dynamics report runs on the dynamic room, synthetic:dynamic[:FRAMES[:CHANGE]], \
+             or the floor walk with people, synthetic:floor-people[:WALK[:FRAMES]]",
             a.dataset
         );
     }

@@ -5,7 +5,7 @@
 use crate::dataset::classes::{render_color, NYU40};
 use crate::dataset::source::Dataset;
 use crate::dataset::synthetic::{
-    dynamic, floor, write_split, DepthNoise, DynamicOptions, SynthOptions, Synthetic,
+    dynamic, floor, people, write_split, DepthNoise, DynamicOptions, SynthOptions, Synthetic,
 };
 use crate::eval::label_stats::LabelStats;
 use crate::output::picture;
@@ -26,6 +26,9 @@ pub enum SceneArg {
     /// The room where things move: a chair is moved, an object replaced, a door opens,
     /// a person and a cart pass (`--change`, `--frozen`).
     Dynamic,
+    /// A walk through the building floor while people walk its corridor (`--walk`,
+    /// `--frozen`).
+    FloorPeople,
 }
 
 /// Arguments of `sndt synth`.
@@ -49,15 +52,16 @@ pub struct SynthArgs {
     #[arg(long, value_enum, default_value_t = ChunkCompression::Zstd, requires = "mcap")]
     pub mcap_compression: ChunkCompression,
     /// What to generate: separate rooms, a walk through the building floor (scene
-    /// `synth_floor`, trajectory `cam_NN` of walk NN + 1), or the room where things move
-    /// (scene `synth_dynamic`).
+    /// `synth_floor`, trajectory `cam_NN` of walk NN + 1), the room where things move
+    /// (scene `synth_dynamic`), or a walk of the floor with people in its corridor (scene
+    /// `synth_floor_people`).
     #[arg(long, value_enum, default_value = "rooms")]
     pub scene: SceneArg,
     /// Number of rooms with `--scene rooms` (kinds cycle: living, bedroom, kitchen, office,
     /// bathroom, open plan) [default: 6].
     #[arg(long)]
     pub scenes: Option<usize>,
-    /// Which walk through the floor with `--scene floor`: 1, 2, ... (odd walks go from the
+    /// Which walk through the floor with `--scene floor` or `floor-people`: 1, 2, ... (odd walks go from the
     /// west end of the corridor to the east, even walks back; each picks its own
     /// standpoints and views) [default: 1].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
@@ -66,8 +70,8 @@ pub struct SynthArgs {
     /// walk [default: 30].
     #[arg(long, value_name = "FRAME")]
     pub change: Option<u32>,
-    /// With `--scene dynamic`: leave every object where it stands at frame 0 (the frozen
-    /// twin the dynamics report compares with).
+    /// With `--scene dynamic` or `floor-people`: leave every object where it stands at
+    /// frame 0 (the frozen twin the dynamics report compares with; no people).
     #[arg(long)]
     pub frozen: bool,
     /// Seed of everything.
@@ -91,23 +95,36 @@ pub struct SynthArgs {
 /// previews and scores the raw predictions.
 pub fn run(a: &SynthArgs) -> Result<()> {
     let t = Instant::now();
-    if a.walk.is_some() && a.scene != SceneArg::Floor {
-        bail!("--walk: only with --scene floor");
+    let on_floor = matches!(a.scene, SceneArg::Floor | SceneArg::FloorPeople);
+    if a.walk.is_some() && !on_floor {
+        bail!("--walk: only with --scene floor or floor-people");
     }
     if a.scenes.is_some() && a.scene != SceneArg::Rooms {
         bail!("--scenes: only with --scene rooms");
     }
-    if (a.change.is_some() || a.frozen) && a.scene != SceneArg::Dynamic {
-        bail!("--change and --frozen: only with --scene dynamic");
+    if a.change.is_some() && a.scene != SceneArg::Dynamic {
+        bail!("--change: only with --scene dynamic");
+    }
+    if a.frozen && !matches!(a.scene, SceneArg::Dynamic | SceneArg::FloorPeople) {
+        bail!("--frozen: only with --scene dynamic or floor-people");
     }
     let floor_walk = (a.scene == SceneArg::Floor).then(|| a.walk.unwrap_or(1));
-    let dynamic = (a.scene == SceneArg::Dynamic).then(|| DynamicOptions {
-        change: a.change.unwrap_or(dynamic::DEFAULT_CHANGE),
-        frozen: a.frozen,
-    });
+    let dynamic = match a.scene {
+        SceneArg::Dynamic => Some(DynamicOptions {
+            change: a.change.unwrap_or(dynamic::DEFAULT_CHANGE),
+            frozen: a.frozen,
+            floor_walk: None,
+        }),
+        SceneArg::FloorPeople => Some(DynamicOptions {
+            frozen: a.frozen,
+            floor_walk: Some(a.walk.unwrap_or(1)),
+            ..DynamicOptions::default()
+        }),
+        SceneArg::Rooms | SceneArg::Floor => None,
+    };
     let default_frames = match a.scene {
         SceneArg::Rooms => SynthOptions::default().frames,
-        SceneArg::Floor => floor::DEFAULT_FRAMES,
+        SceneArg::Floor | SceneArg::FloorPeople => floor::DEFAULT_FRAMES,
         SceneArg::Dynamic => dynamic::DEFAULT_FRAMES,
     };
     let options = SynthOptions {
@@ -203,15 +220,20 @@ fn print_class_histogram(class_pixels: &[u64]) {
 fn write_previews(split: &Synthetic, dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     for (_, ids) in split.trajectories() {
-        // The dynamic room: before the change, the person standing, the cart passing, the end.
-        let picks: Vec<usize> = match split.dynamic_scene().and_then(|s| s.events.first()) {
-            Some(e) => vec![
+        // The dynamic room: before the change, the person standing, the cart passing, the
+        // end; the floor with people: the start and the middle of each person's crossing.
+        let scene = split.dynamic_scene();
+        let picks: Vec<usize> = match (scene, scene.and_then(|s| s.events.first())) {
+            (Some(s), _) if s.name == people::NAME => std::iter::once(0)
+                .chain(s.events.iter().map(|e| (e.first + e.vacated) as usize / 2))
+                .collect(),
+            (_, Some(e)) => vec![
                 0,
                 e.first as usize + 15,
                 e.first as usize + 55,
                 ids.len() - 1,
             ],
-            None => vec![0, ids.len() / 2],
+            _ => vec![0, ids.len() / 2],
         };
         for id in picks.iter().filter_map(|&i| ids.get(i)) {
             let f = split.load(id)?;

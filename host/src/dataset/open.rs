@@ -21,7 +21,11 @@ use std::path::Path;
 ///   scene `synth_dynamic`; `synthetic:dynamic:FRAMES` and
 ///   `synthetic:dynamic:FRAMES:CHANGE` set both (every event must fit in the walk);
 ///   `synthetic:dynamic-frozen[...]` is the same walk with every object left where it
-///   stands at frame 0.
+///   stands at frame 0;
+/// - `synthetic:floor-people[:WALK[:FRAMES]]`: walk `WALK` (default 1) of the building
+///   floor, 1,000 frames unless `FRAMES`, with people walking its corridor
+///   ([`people`](super::synthetic::people)), scene `synth_floor_people`;
+///   `synthetic:floor-people-frozen[...]` is the same walk without them.
 ///
 /// ```
 /// let d = sndt_host::dataset::open_spec("synthetic:1:2", &Default::default()).unwrap();
@@ -66,6 +70,22 @@ fn parse_synthetic(spec: &str, rest: &str) -> Result<super::synthetic::SynthOpti
                 None => super::synthetic::floor::DEFAULT_FRAMES,
             };
         }
+        ["floor-people" | "floor-people-frozen", more @ ..] if more.len() <= 2 => {
+            let walk = more.first().map_or(Ok(1), |w| w.parse());
+            let walk: u32 = walk.with_context(|| format!("{spec}: walk"))?;
+            if walk == 0 {
+                bail!("{spec}: walks are numbered from 1");
+            }
+            o.frames = match more.get(1) {
+                Some(f) => f.parse().with_context(|| format!("{spec}: frames"))?,
+                None => super::synthetic::floor::DEFAULT_FRAMES,
+            };
+            o.dynamic = Some(super::synthetic::DynamicOptions {
+                frozen: parts[0] == "floor-people-frozen",
+                floor_walk: Some(walk),
+                ..Default::default()
+            });
+        }
         ["dynamic" | "dynamic-frozen", more @ ..] if more.len() <= 2 => {
             let frozen = parts[0] == "dynamic-frozen";
             let mut d = super::synthetic::DynamicOptions {
@@ -87,8 +107,8 @@ fn parse_synthetic(spec: &str, rest: &str) -> Result<super::synthetic::SynthOpti
         }
         _ => bail!(
             "{spec}: expected synthetic, synthetic:SCENES:FRAMES, synthetic:floor, \
-                 synthetic:floor:WALK, synthetic:floor:WALK:FRAMES, synthetic:dynamic or \
-                 synthetic:dynamic:FRAMES[:CHANGE]"
+                 synthetic:floor:WALK, synthetic:floor:WALK:FRAMES, synthetic:dynamic, \
+                 synthetic:dynamic:FRAMES[:CHANGE] or synthetic:floor-people[:WALK[:FRAMES]]"
         ),
     }
     Ok(o)

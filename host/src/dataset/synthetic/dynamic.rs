@@ -26,6 +26,7 @@
 //! left (its former surface), the frame from which its old place is empty, and the object
 //! that appears in its place, if any.
 
+use super::floor::Floor;
 use super::geometry::{Aabb, Bvh, Cast, Hit, Primitive, Shape};
 use super::scenes::class::*;
 use crate::dataset::synthetic::room::look_at;
@@ -88,8 +89,8 @@ pub struct Event {
 
 /// An object's shapes over time: state `i` holds from frame `states[i].0` until the next.
 #[derive(Clone, Debug)]
-struct Timeline {
-    states: Vec<(u32, Vec<Primitive>)>,
+pub(super) struct Timeline {
+    pub(super) states: Vec<(u32, Vec<Primitive>)>,
 }
 
 impl Timeline {
@@ -203,13 +204,13 @@ impl Objects {
 }
 
 /// Every shape of the states that begin before frame `before`.
-fn flatten(states: &[(u32, Vec<Primitive>)], before: u32) -> Vec<Primitive> {
+pub(super) fn flatten(states: &[(u32, Vec<Primitive>)], before: u32) -> Vec<Primitive> {
     let kept = states.iter().filter(|(from, _)| *from < before);
     kept.flat_map(|(_, p)| p.iter().copied()).collect()
 }
 
 /// The box around `prims` (a point at the origin for none).
-fn bounds(prims: &[Primitive]) -> Aabb {
+pub(super) fn bounds(prims: &[Primitive]) -> Aabb {
     let first = prims.first().map(|p| p.shape.aabb());
     let origin = Aabb {
         min: [0.0; 3],
@@ -220,23 +221,56 @@ fn bounds(prims: &[Primitive]) -> Aabb {
         .fold(first.unwrap_or(origin), |b, p| b.union(&p.shape.aabb()))
 }
 
-/// The room, its moving objects and its events.
+/// What never moves: the room, or the building floor of the floor walk with people
+/// ([`super::people`]).
+#[derive(Clone, Debug)]
+pub enum Base {
+    /// The dynamic room's shell, table and furniture.
+    Room(Bvh),
+    /// The building floor.
+    Floor(Box<Floor>),
+}
+
+impl Base {
+    /// Every static shape.
+    pub fn primitives(&self) -> Vec<Primitive> {
+        match self {
+            Base::Room(bvh) => bvh.primitives().to_vec(),
+            Base::Floor(floor) => floor.primitives().copied().collect(),
+        }
+    }
+}
+
+impl Cast for Base {
+    fn cast(&self, o: &[f32; 3], d: &[f32; 3], t_max: f32) -> Option<Hit> {
+        match self {
+            Base::Room(bvh) => bvh.cast(o, d, t_max),
+            Base::Floor(floor) => floor.cast(o, d, t_max),
+        }
+    }
+}
+
+/// A scene where things move: its static part, its moving objects and its events.
 #[derive(Clone, Debug)]
 pub struct DynamicScene {
+    /// Scene name in frame ids: [`NAME`] or [`super::people::NAME`].
+    pub name: &'static str,
     /// What never moves.
-    pub base: Bvh,
-    timelines: Vec<Timeline>,
+    pub base: Base,
+    pub(super) timelines: Vec<Timeline>,
     /// The changes, in the order of the module doc.
     pub events: Vec<Event>,
     /// Frames of the walk.
     pub frames: usize,
     /// Every frame shows frame 0's scene.
     pub frozen: bool,
+    /// The camera per frame, for a walk of the floor (the room's camera is a formula).
+    pub(super) poses: Option<Vec<Isometry3<f32>>>,
 }
 
-/// The scene at one frame: the static room and the moving objects where they are then.
+/// The scene at one frame: the static part and the moving objects where they are then.
 pub struct SceneAt<'a> {
-    base: &'a Bvh,
+    base: &'a Base,
     moving: Option<Bvh>,
 }
 
@@ -288,11 +322,13 @@ impl DynamicScene {
         base.extend(objects.table.iter().copied());
         base.extend(furniture());
         Ok(DynamicScene {
-            base: Bvh::new(base),
+            name: NAME,
+            base: Base::Room(Bvh::new(base)),
             timelines: objects.timelines(change),
             events: objects.events(change),
             frames,
             frozen,
+            poses: None,
         })
     }
 
@@ -314,12 +350,9 @@ impl DynamicScene {
     pub fn primitives_at(&self, frame: u32) -> Vec<Primitive> {
         let frame = if self.frozen { 0 } else { frame };
         let moving = self.timelines.iter().flat_map(|t| t.at(frame).iter());
-        self.base
-            .primitives()
-            .iter()
-            .chain(moving)
-            .copied()
-            .collect()
+        let mut out = self.base.primitives();
+        out.extend(moving.copied());
+        out
     }
 
     /// Every shape any moving object ever has.
@@ -328,9 +361,17 @@ impl DynamicScene {
         states.flat_map(|(_, p)| p.iter().copied()).collect()
     }
 
-    /// The camera at frame `frame`: 0.4 m from the front wall at eye height, swaying
-    /// 0.5 m sideways with a period of 50 frames, looking at the table.
+    /// The camera at frame `frame`: in the room 0.4 m from the front wall at eye height,
+    /// swaying 0.5 m sideways with a period of 50 frames, looking at the table; on the
+    /// floor, the walk's pose (the last one past its end).
     pub fn pose(&self, frame: u32) -> Isometry3<f32> {
+        if let Some(poses) = &self.poses {
+            let last = poses.len().saturating_sub(1);
+            return poses
+                .get((frame as usize).min(last))
+                .copied()
+                .unwrap_or_else(Isometry3::identity);
+        }
         let phase = std::f32::consts::TAU * frame as f32 / 50.0;
         let eye = [3.0 + 0.5 * phase.sin(), 0.4, 1.5];
         look_at(eye, [3.0 + 0.25 * phase.sin(), 4.0, 0.75])
@@ -440,8 +481,9 @@ fn door_leaf(open: f32) -> Primitive {
     }
 }
 
-/// A person standing at `xy`: two legs, a torso, a head (upright cylinders).
-fn person(xy: [f32; 2]) -> Vec<Primitive> {
+/// A person standing at `xy`: two legs, a torso, a head (upright cylinders), instance
+/// `instance`.
+pub(super) fn person(xy: [f32; 2], instance: u16) -> Vec<Primitive> {
     let [x, y] = xy;
     let c = |dx: f32, r: f32, z0: f32, z1: f32| Primitive {
         shape: Shape::Cylinder {
@@ -451,7 +493,7 @@ fn person(xy: [f32; 2]) -> Vec<Primitive> {
             z1,
         },
         label: PERSON,
-        instance: PERSON_ID,
+        instance,
     };
     vec![
         c(-0.1, 0.07, 0.0, 0.85),
@@ -466,11 +508,11 @@ fn person(xy: [f32; 2]) -> Vec<Primitive> {
 fn person_walk(c: u32) -> Vec<(u32, Vec<Primitive>)> {
     let mut states = Vec::new();
     for i in 0..10 {
-        states.push((c + i, person([0.6 + 0.24 * i as f32, 1.9])));
+        states.push((c + i, person([0.6 + 0.24 * i as f32, 1.9], PERSON_ID)));
     }
-    states.push((c + 10, person([3.0, 1.9])));
+    states.push((c + 10, person([3.0, 1.9], PERSON_ID)));
     for i in 0..10 {
-        states.push((c + 30 + i, person([3.24 + 0.24 * i as f32, 1.9])));
+        states.push((c + 30 + i, person([3.24 + 0.24 * i as f32, 1.9], PERSON_ID)));
     }
     states.push((c + 40, Vec::new()));
     states

@@ -25,6 +25,7 @@
 pub mod dynamic;
 pub mod floor;
 pub mod geometry;
+pub mod people;
 pub mod predict;
 pub mod room;
 pub mod scenes;
@@ -280,10 +281,13 @@ pub struct SynthOptions {
 /// How the [`dynamic`] room changes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct DynamicOptions {
-    /// The frame of the first change ([`dynamic::DEFAULT_CHANGE`]).
+    /// The frame of the first change ([`dynamic::DEFAULT_CHANGE`]; the room only).
     pub change: u32,
     /// Every frame shows the scene as at frame 0 (the reference of static loss).
     pub frozen: bool,
+    /// `Some(walk)`: instead of the room, walk `walk` of the building floor with people in
+    /// its corridor ([`people`]), scene [`people::NAME`].
+    pub floor_walk: Option<u32>,
 }
 
 impl Default for DynamicOptions {
@@ -291,6 +295,7 @@ impl Default for DynamicOptions {
         DynamicOptions {
             change: dynamic::DEFAULT_CHANGE,
             frozen: false,
+            floor_walk: None,
         }
     }
 }
@@ -398,11 +403,16 @@ impl Synthetic {
     /// assert_eq!(f.id.to_string(), "synth_dynamic/cam_00/0004");
     /// ```
     fn dynamic(options: SynthOptions, d: DynamicOptions) -> Result<Synthetic> {
-        let scene = dynamic::DynamicScene::new(options.frames, d.change, d.frozen)?;
+        let scene = match d.floor_walk {
+            Some(walk) => {
+                dynamic::DynamicScene::floor_people(options.seed, walk, options.frames, d.frozen)?
+            }
+            None => dynamic::DynamicScene::new(options.frames, d.change, d.frozen)?,
+        };
         let poses = vec![(0..options.frames as u32).map(|f| scene.pose(f)).collect()];
         let frames = (0..options.frames as u32)
             .map(|index| FrameId {
-                scene: dynamic::NAME.into(),
+                scene: scene.name.into(),
                 cam: "cam_00".into(),
                 index,
             })
@@ -489,9 +499,8 @@ impl Synthetic {
     /// Renders a frame and also returns the instance image.
     pub fn render_frame(&self, id: &FrameId) -> Result<(Frame, Vec<u16>)> {
         if let Some(scene) = &self.dynamic {
-            if id.scene != dynamic::NAME || id.cam != "cam_00" || id.index as usize >= scene.frames
-            {
-                bail!("{id}: no such frame in the synthetic dynamic room's walk");
+            if id.scene != scene.name || id.cam != "cam_00" || id.index as usize >= scene.frames {
+                bail!("{id}: no such frame in the synthetic dynamic walk");
             }
             let pose = self.poses[0][id.index as usize];
             return Ok(self.frame(id, &scene.at(id.index), pose, DYNAMIC_KEY));
@@ -563,6 +572,25 @@ impl Synthetic {
 
 impl Dataset for Synthetic {
     fn describe(&self) -> String {
+        if let (Some(scene), Some(walk)) = (
+            &self.dynamic,
+            self.options.dynamic.and_then(|d| d.floor_walk),
+        ) {
+            return format!(
+                "synthetic floor walk {walk} with {} people in the corridor{} (seed {}): {} \
+                 frames of {}x{}",
+                scene.events.len(),
+                if scene.frozen {
+                    ", frozen (no people)"
+                } else {
+                    ""
+                },
+                self.options.seed,
+                scene.frames,
+                self.options.camera.width,
+                self.options.camera.height,
+            );
+        }
         if let Some(scene) = &self.dynamic {
             return format!(
                 "synthetic dynamic room{} (seed {}): {} frames of {}x{}, first change at frame {}",

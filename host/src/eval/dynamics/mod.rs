@@ -158,7 +158,7 @@ impl Watch {
         let last = scene.frames.saturating_sub(1) as u32;
         let standing = surface::surface_voxels(&scene.primitives_at(last), cell);
         let moving = surface::surface_voxels(&scene.moving_primitives(), cell);
-        let statics: BTreeSet<VoxelKey> = surface::surface_voxels(scene.base.primitives(), cell)
+        let statics: BTreeSet<VoxelKey> = surface::surface_voxels(&scene.base.primitives(), cell)
             .difference(&moving)
             .copied()
             .collect();
@@ -327,14 +327,18 @@ struct Walked {
     points: Option<PathBuf>,
 }
 
-/// Runs the report on the dynamic walk `split` (a [`Synthetic`] of the dynamic room).
+/// Runs the report on the dynamic walk `split` (a [`Synthetic`] of the dynamic room or of
+/// the floor walk with people).
 pub fn run(
     split: &Synthetic,
     options: &DynamicsOptions,
     progress: &(dyn Fn() + Sync),
 ) -> Result<DynamicsReport> {
     let Some(scene) = split.dynamic_scene() else {
-        bail!("the dynamics report needs the dynamic room (synthetic:dynamic[:FRAMES[:CHANGE]])");
+        bail!(
+            "the dynamics report needs a dynamic walk (synthetic:dynamic[:FRAMES[:CHANGE]] or \
+             synthetic:floor-people[:WALK[:FRAMES]])"
+        );
     };
     if scene.frozen {
         bail!("the dynamics report needs the dynamic walk, not its frozen twin");
