@@ -300,7 +300,17 @@ mod tests {
         let a = args("sndt synth --out x --walk 2");
         assert_eq!(
             format!("{}", run(&a).unwrap_err()),
-            "--walk: only with --scene floor"
+            "--walk: only with --scene floor or floor-people"
+        );
+        let a = args("sndt synth --out x --scene floor --frozen");
+        assert_eq!(
+            format!("{}", run(&a).unwrap_err()),
+            "--frozen: only with --scene dynamic or floor-people"
+        );
+        let a = args("sndt synth --out x --scene floor-people --change 5");
+        assert_eq!(
+            format!("{}", run(&a).unwrap_err()),
+            "--change: only with --scene dynamic"
         );
         let a = args("sndt synth --out x --scene floor --scenes 2");
         assert_eq!(
