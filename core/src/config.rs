@@ -79,15 +79,18 @@ pub struct Config {
     /// Gaussian's 4-sigma ellipsoid is enough. Other rays give it no miss and leave it to
     /// the frame's next ray; voxels that received points keep the NDT-OM miss, which
     /// protects thin surfaces from grazing rays. At -3 a voxel at the clamp (3.5) needs
-    /// two frames of such evidence to turn free.
+    /// two frames of such evidence to turn free. In a depth frame a see-through miss
+    /// also spreads, as a quarter of it, to each face neighbour of the same class that
+    /// got neither points nor a miss and that the image shows hidden behind something:
+    /// the hidden side of an object that is gone where the camera sees it goes too.
     ///
     /// NDT-OM's miss is at most `logit(0.5 - lambda)` (-0.41 at the default `lambda`) and
     /// reaches a thin structure's former voxel only from the rare ray that crosses its
     /// footprint: as published, a moved chair stays occupied for the whole 160-frame walk
-    /// of the dynamic synthetic room. At -3 it clears in 2 frames, as do an opened door
-    /// (2), a passing person (3) and a cart (4), for 0.14 points of mIoU on the default
-    /// synthetic split at 10 cm with ground-truth labels (0.05 with predicted ones):
-    /// `sndt dynamics`, docs/DYNAMICS.md.
+    /// of the dynamic synthetic room. At -3 it clears in 2 frames at 10 cm, as do an
+    /// opened door (2), a passing person (3) and a cart (4), and a night stand replaced by
+    /// a box in 10, for 0.20 points of mIoU on the default synthetic split at 10 cm with
+    /// ground-truth labels (0.08 with predicted ones): `sndt dynamics`, docs/DYNAMICS.md.
     pub see_through_miss: f32,
     /// Sensor range noise `sigma = noise_base + noise_quadratic * range^2` in metres, used
     /// by NDT-OM misses. Defaults 0.02 and 0.0025 (0.06 m at 4 m).

@@ -469,3 +469,75 @@ fn depth_image_sees_through_the_mean_by_hand() {
         close(core_log_odds(&core, [0, 0, 10]), want, 2e-3, &what);
     }
 }
+
+/// The see-through miss spreads to a hidden neighbour of the same class, by hand. A is
+/// as in `depth_image_sees_through_the_mean_by_hand` (the centre pixel sees beyond its
+/// mean: 3.5 to 0.5); its neighbour B = A + (0.1, 0, 0). Both are at the upper clamp
+/// after five frames of `six_points` (B's shifted by 0.1 in x). B's mean (0.15, 0.05,
+/// 1.05) projects to u = 10 * 0.15 / 1.05 + 1.5 = 2.93, v = 1.98: pixel (2, 1). No ray of
+/// the frame passes through B's Gaussian and no point lands in B. With column 2 of the
+/// image at 0.5 m, that pixel is nearer than B's mean by more than a cell plus twice the
+/// noise (1.05 less 0.146): something hides B, and B, of A's class, takes a quarter of
+/// A's miss, 3.5 to 2.75. B of another class, or B shown (column 2 at 1.12 m, within the
+/// margin of its mean), keeps its clamp.
+#[test]
+fn see_through_spreads_to_a_hidden_neighbour_of_the_same_class_by_hand() {
+    use sndt_core::{depth_point, Depth, DepthImage, DepthKind, LabelImage};
+    let config = Config {
+        see_through_miss: -3.0,
+        ..Config::DEFAULT
+    };
+    let camera = Pinhole {
+        fx: 10.0,
+        fy: 10.0,
+        cx: 1.5,
+        cy: 1.5,
+        width: 3,
+        height: 3,
+    };
+    let b_points: Vec<[f32; 3]> = six_points()
+        .iter()
+        .map(|p| [p[0] + 0.1, p[1], p[2]])
+        .collect();
+    for (column_2, b_class, want_b) in [(0.5f32, 2u8, 2.75), (0.5, 3, 3.5), (1.12, 2, 3.5)] {
+        let mut r = RefMap::new(config, 40);
+        let mut core: Box<SmallMap> = sndt_host::mapping::boxed_map(config).unwrap();
+        let mut both = pts(&six_points(), 2);
+        both.extend(pts(&b_points, b_class));
+        for _ in 0..5 {
+            r.integrate(&Isometry3::identity(), &both).unwrap();
+            core.integrate(&Isometry3::identity(), &both).unwrap();
+        }
+        close(r.log_odds(&[1, 0, 10]), 3.5, 1e-9, "B at the clamp");
+        let depth: Vec<f32> = (0..9)
+            .map(|i| if i % 3 == 2 { column_2 } else { 2.15 })
+            .collect();
+        let labels = [2u8; 9];
+        let image = DepthImage {
+            camera,
+            depth: Depth::Metres(&depth),
+            kind: DepthKind::Planar,
+            labels: LabelImage::Top1(&labels),
+            stride: 1,
+        };
+        let points: Vec<[f32; 3]> = (0..9u32)
+            .map(|i| {
+                depth_point(
+                    camera.ray(i % 3, i / 3),
+                    depth[i as usize],
+                    DepthKind::Planar,
+                )
+            })
+            .map(Option::unwrap)
+            .collect();
+        let pose = Isometry3::identity();
+        r.integrate_seen(&pose, &pts(&points, 2), Some(&image))
+            .unwrap();
+        core.integrate_depth(&pose, &image).unwrap();
+        let what = format!("column 2 at {column_2}, B of class {b_class}");
+        close(r.log_odds(&[0, 0, 10]), 0.5, 1e-5, &what);
+        close(core_log_odds(&core, [0, 0, 10]), 0.5, 2e-3, &what);
+        close(r.log_odds(&[1, 0, 10]), want_b, 1e-5, &what);
+        close(core_log_odds(&core, [1, 0, 10]), want_b, 2e-3, &what);
+    }
+}

@@ -23,7 +23,7 @@ use crate::key::{
 use crate::storage::block::bits;
 use crate::storage::map::Map;
 use crate::storage::table::Entry;
-use crate::storage::voxel::Voxel;
+use crate::storage::voxel::{argmax, Voxel};
 use nalgebra::Vector3;
 
 /// Prepared-Gaussian cache of phase 3 (voxel statistics no longer change then).
@@ -461,10 +461,15 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         let Some(surface) = self.blocks.get(bs).map(|b| b.surface) else {
             return;
         };
+        let mut seen = None;
         let delta = if has_cell(surface, cell) && self.config.miss_model == MissModel::NdtOm {
             let key = VoxelKey::from_block_cell(block, cell);
             match self.surface_miss(f, cache, seg, (key, bs, cell)) {
-                Some(delta) => delta,
+                Some((delta, true)) => {
+                    seen = Some(key);
+                    delta
+                }
+                Some((delta, false)) => delta,
                 None => return,
             }
         } else {
@@ -478,6 +483,82 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         }
         if LANES_PAY {
             Self::note_missed(f, block, bit);
+        }
+        if let Some(key) = seen {
+            self.spread_see_through(f, &key, delta);
+        }
+    }
+
+    /// After surface voxel `key` took see-through miss `delta` (fixed point) in a depth
+    /// frame: each face neighbour (+x, -x, +y, -y, +z, -z) with a valid Gaussian and the
+    /// same class, occupied, that got neither points nor a miss this frame and whose mean
+    /// the image shows hidden behind something ([`pixel_hides`]) takes
+    /// [`SPREAD_SHARE`] of it. An object that is gone where the camera sees it goes
+    /// where it is hidden too: the side of a replaced night stand behind a table edge,
+    /// which no ray or pixel of the walk sees through, clears in 10 frames, not 25.
+    fn spread_see_through(&mut self, f: &mut FrameState, key: &VoxelKey, delta: i32) {
+        let class = match self
+            .voxels
+            .find(key.packed())
+            .and_then(|vs| self.voxels.get(vs))
+        {
+            Some(v) => argmax(&v.hist).map(|c| c.0),
+            None => return,
+        };
+        let (x, y, z) = (i32::from(key.x), i32::from(key.y), i32::from(key.z));
+        let around = [
+            (1, 0, 0),
+            (-1, 0, 0),
+            (0, 1, 0),
+            (0, -1, 0),
+            (0, 0, 1),
+            (0, 0, -1),
+        ];
+        for (dx, dy, dz) in around {
+            let Some(n) = VoxelKey::from_ints(x + dx, y + dy, z + dz) else {
+                continue;
+            };
+            let (block, cell) = (n.block(), n.cell());
+            if self.blocks.find(block).is_none() {
+                continue;
+            }
+            let Some(bs) = self.frame_block(f, block, false) else {
+                continue;
+            };
+            let bit = 1u64 << (cell & 63);
+            let Some(b) = self.blocks.get(bs) else {
+                continue;
+            };
+            let occupied = b.cells[cell as usize & 63] > 0;
+            if b.surface & bit == 0 || (b.hit | b.missed) & bit != 0 || !occupied {
+                continue;
+            }
+            let cfg = &self.config;
+            let mean = match self
+                .voxels
+                .find(n.packed())
+                .and_then(|vs| self.voxels.get(vs))
+            {
+                Some(v) if v.n >= cfg.n_min && argmax(&v.hist).map(|c| c.0) == class => {
+                    v.prepared(cfg).mean
+                }
+                _ => continue,
+            };
+            let hidden = f
+                .image
+                .as_ref()
+                .is_some_and(|i| pixel_hides(cfg, f, i, &mean));
+            if !hidden {
+                continue;
+            }
+            let (lo, hi) = f.clamp;
+            if let Some(b) = self.blocks.get_mut(bs) {
+                b.missed |= bit;
+                b.add_logodds(cell, delta / SPREAD_SHARE, lo, hi);
+            }
+            if LANES_PAY {
+                Self::note_missed(f, block, bit);
+            }
         }
     }
 
@@ -497,7 +578,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         cache: &mut GaussCache,
         seg: &Segment,
         (key, bs, cell): (VoxelKey, usize, u32),
-    ) -> Option<i32> {
+    ) -> Option<(i32, bool)> {
         let cfg = &self.config;
         let found = self.voxels.find(key.packed());
         match found.and_then(|vs| Some((vs, self.voxels.get(vs)?))) {
@@ -507,20 +588,20 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 let block = self.blocks.get(bs);
                 let hit = block.is_none_or(|b| has_cell(b.hit, cell));
                 if hit || cfg.see_through_miss == 0.0 {
-                    ndt_om_miss(cfg, &seg.ray(f), &g).map(to_fixed)
+                    ndt_om_miss(cfg, &seg.ray(f), &g).map(|l| (to_fixed(l), false))
                 } else {
                     if f.image
                         .as_ref()
                         .is_some_and(|i| seen_through(cfg, f, i, &g.mean))
                     {
-                        return Some(to_fixed(cfg.see_through_miss));
+                        return Some((to_fixed(cfg.see_through_miss), true));
                     }
                     let l = block.map_or(0, |b| i32::from(b.cells[cell as usize & 63]));
                     let doubted = l < f.clamp.1 - to_fixed(SEE_THROUGH_DOUBT);
-                    see_through_miss(cfg, &seg.ray(f), &g, doubted).map(to_fixed)
+                    see_through_miss(cfg, &seg.ray(f), &g, doubted).map(|l| (to_fixed(l), true))
                 }
             }
-            _ => Some(f.miss),
+            _ => Some((f.miss, false)),
         }
     }
 }
@@ -592,6 +673,14 @@ const SEE_THROUGH_SURFACE: f32 = 2.0;
 /// instead of 0.07 (2.5 until doubted: 0.67).
 const SEE_THROUGH_HALO: f32 = 4.0;
 
+/// A see-through miss spreads to a hidden neighbour as one `SPREAD_SHARE`th of it (fixed
+/// point, rounded towards 0). A spread voxel, once doubted, spreads on from its own
+/// see-through misses, so a spread runs along a hidden surface over the frames: in full
+/// or halved it cleared the night stand in 8 frames, but ate the hidden backs of
+/// standing figures and boxes on the default synthetic split at 10 cm (82.77 and 82.84 %
+/// mIoU against 82.91 %); a quarter clears it in 10 frames for 82.85 %.
+const SPREAD_SHARE: i32 = 4;
+
 /// A voxel is doubted when its log-odds lie more than this below `clamp_max`: a static
 /// surface the camera sees sits at the clamp, one that a see-through miss has hit does
 /// not (0.5 and 1 gave the same figures).
@@ -622,6 +711,27 @@ fn ndt_om_miss(cfg: &Config, ray: &Ray, g: &Prepared) -> Option<f32> {
 /// plane through the mean meets the pixel's ray at the mean), one hidden behind something
 /// gives a nearer depth: neither passes.
 fn seen_through(cfg: &Config, f: &FrameState, image: &DepthImage<'_>, mean: &Vector3<f32>) -> bool {
+    pixel_depth(cfg, f, image, mean)
+        .is_some_and(|(measured, along, margin)| measured > along + margin)
+}
+
+/// Whether the pixel `mean` projects to hides it: measured nearer than the mean by more
+/// than a cell plus twice the range noise (false outside the image and for a pixel
+/// without a depth).
+fn pixel_hides(cfg: &Config, f: &FrameState, image: &DepthImage<'_>, mean: &Vector3<f32>) -> bool {
+    pixel_depth(cfg, f, image, mean)
+        .is_some_and(|(measured, along, margin)| measured < along - margin)
+}
+
+/// The depth measured at the pixel `mean` projects to, the mean's own depth along that
+/// pixel's ray, and the margin a cell plus twice the range noise; `None` outside the
+/// image or without a finite depth.
+fn pixel_depth(
+    cfg: &Config,
+    f: &FrameState,
+    image: &DepthImage<'_>,
+    mean: &Vector3<f32>,
+) -> Option<(f32, f32, f32)> {
     let d = [
         mean.x - f.origin[0],
         mean.y - f.origin[1],
@@ -632,7 +742,7 @@ fn seen_through(cfg: &Config, f: &FrameState, image: &DepthImage<'_>, mean: &Vec
     let p: [f32; 3] =
         core::array::from_fn(|i| m[(0, i)] * d[0] + m[(1, i)] * d[1] + m[(2, i)] * d[2]);
     if p[2].is_nan() || p[2] <= 0.0 {
-        return false;
+        return None;
     }
     let cam = &image.camera;
     let u = cam.fx * p[0] / p[2] + cam.cx;
@@ -640,19 +750,19 @@ fn seen_through(cfg: &Config, f: &FrameState, image: &DepthImage<'_>, mean: &Vec
     // False for NaN too.
     let inside = u >= 0.0 && v >= 0.0 && u < cam.width as f32 && v < cam.height as f32;
     if !inside {
-        return false;
+        return None;
     }
     let s = image.stride.max(1) as usize;
     let (col, row) = (u as usize / s * s, v as usize / s * s);
-    let Some(measured) = image.depth.metres(row * cam.width as usize + col) else {
-        return false;
-    };
+    let measured = image.depth.metres(row * cam.width as usize + col)?;
     let along = match image.kind {
         DepthKind::Planar => p[2],
         DepthKind::Range => sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]),
     };
     let sigma = cfg.noise_base + cfg.noise_quadratic * along * along;
-    measured.is_finite() && measured > along + cfg.cell_size + 2.0 * sigma
+    measured
+        .is_finite()
+        .then_some((measured, along, cfg.cell_size + 2.0 * sigma))
 }
 
 /// Whether bit `cell` (0..64) of a block mask is set; on 32-bit targets a test of one

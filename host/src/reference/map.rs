@@ -533,6 +533,7 @@ impl RefMap {
         }
         let cfg = self.config;
         let mut delta = cfg.miss as f64;
+        let mut spread = false;
         if cfg.miss_model == MissModel::NdtOm {
             let g = *misses
                 .gaussians
@@ -553,12 +554,60 @@ impl RefMap {
                     Some(l) => delta = l,
                     None => return false,
                 }
+                spread = see;
             }
         }
+        self.apply_miss(key, delta, misses);
+        if spread {
+            self.spread_see_through(key, delta, view, misses);
+        }
+        true
+    }
+
+    /// Adds miss `delta` to voxel `key`, its one miss this frame.
+    fn apply_miss(&mut self, key: &Key, delta: f64, misses: &mut FrameMisses) {
+        let cfg = self.config;
         misses.missed.insert(*key);
         let l = self.cells.entry(*key).or_insert(0.0);
         *l = (*l + delta).clamp(cfg.clamp_min as f64, cfg.clamp_max as f64);
-        true
+    }
+
+    /// After a see-through miss `delta` of surface voxel `key`: each face neighbour (+x,
+    /// -x, +y, -y, +z, -z) with a valid Gaussian and the same class, occupied, without
+    /// points or a miss this frame, whose mean the depth image shows hidden (the pixel
+    /// it projects to measured nearer by more than a cell plus twice the range noise),
+    /// takes a quarter of it (the core's `SPREAD_SHARE`; the core rounds its fixed point
+    /// towards 0).
+    fn spread_see_through(
+        &mut self,
+        key: &Key,
+        delta: f64,
+        view: Option<&View<'_>>,
+        misses: &mut FrameMisses,
+    ) {
+        let Some(view) = view else {
+            return;
+        };
+        let class = self.class(key).map(|c| c.0);
+        let cfg = self.config;
+        for axis in 0..3 {
+            for step in [1, -1] {
+                let mut n = *key;
+                n[axis] += step;
+                if misses.hit.contains(&n) || misses.missed.contains(&n) {
+                    continue;
+                }
+                if self.log_odds(&n) <= 0.0 || self.class(&n).map(|c| c.0) != class {
+                    continue;
+                }
+                let Some((mean, _)) = self.prepared(&n) else {
+                    continue;
+                };
+                if view.hides(&cfg, &mean) {
+                    self.apply_miss(&n, delta / 4.0, misses);
+                }
+            }
+        }
     }
 
     /// The occupied voxels with a valid Gaussian, prepared for ray casting.
@@ -636,29 +685,44 @@ impl<'a> View<'a> {
     /// before it, with the image's stride) measured a depth beyond `p` by more than a
     /// cell plus twice the range noise there: the camera saw through `p`.
     fn sees_beyond(&self, cfg: &Config, p: &Vector3<f64>) -> bool {
+        self.depths(cfg, p)
+            .is_some_and(|(measured, along, margin)| measured > along + margin)
+    }
+
+    /// Whether the pixel that world point `p` projects to measured a depth nearer than
+    /// `p` by more than a cell plus twice the range noise: something hides `p`.
+    fn hides(&self, cfg: &Config, p: &Vector3<f64>) -> bool {
+        self.depths(cfg, p)
+            .is_some_and(|(measured, along, margin)| measured < along - margin)
+    }
+
+    /// The depth measured at the pixel `p` projects to, `p`'s own depth along it and the
+    /// margin (a cell plus twice the range noise); `None` outside the image or without a
+    /// positive finite depth.
+    fn depths(&self, cfg: &Config, p: &Vector3<f64>) -> Option<(f64, f64, f64)> {
         let c = self.to_camera * nalgebra::Point3::from(*p);
         let cam = &self.image.camera;
         if c.z <= 0.0 {
-            return false;
+            return None;
         }
         let u = cam.fx as f64 * c.x / c.z + cam.cx as f64;
         let v = cam.fy as f64 * c.y / c.z + cam.cy as f64;
         if !(u >= 0.0 && v >= 0.0 && u < cam.width as f64 && v < cam.height as f64) {
-            return false;
+            return None;
         }
         let s = self.image.stride.max(1) as usize;
         let (col, row) = (u as usize / s * s, v as usize / s * s);
-        let Some(measured) = self.image.depth.metres(row * cam.width as usize + col) else {
-            return false;
-        };
+        let measured = self.image.depth.metres(row * cam.width as usize + col)?;
         let along = match self.image.kind {
             DepthKind::Planar => c.z,
             DepthKind::Range => c.coords.norm(),
         };
         let sigma = cfg.noise_base as f64 + cfg.noise_quadratic as f64 * along * along;
-        measured.is_finite()
-            && measured > 0.0
-            && measured as f64 > along + cfg.cell_size as f64 + 2.0 * sigma
+        (measured.is_finite() && measured > 0.0).then_some((
+            measured as f64,
+            along,
+            cfg.cell_size as f64 + 2.0 * sigma,
+        ))
     }
 }
 

@@ -113,6 +113,10 @@ pub struct MapperResult {
     pub static_voxels: usize,
     /// Of those, free or unknown at the end of the dynamic run.
     pub static_lost: usize,
+    /// Of the lost ones, those where the surface lies on a voxel face and the voxel on
+    /// its other side, also static surface, is occupied at the end of the dynamic run:
+    /// the map still holds that part of the surface, one voxel over.
+    pub static_held_across: usize,
     /// The paper's metrics (S-NDT only).
     pub metrics: Option<PaperMetrics>,
 }
@@ -151,6 +155,9 @@ struct Watch {
     statics: Vec<usize>,
     /// Per event, the static indices near it.
     near: Vec<Vec<usize>>,
+    /// Per index into `keys`: the static voxels across a voxel face the static surface
+    /// lies on (see [`surface::face_pairs`]).
+    across: Vec<Vec<usize>>,
 }
 
 impl Watch {
@@ -158,7 +165,8 @@ impl Watch {
         let last = scene.frames.saturating_sub(1) as u32;
         let standing = surface::surface_voxels(&scene.primitives_at(last), cell);
         let moving = surface::surface_voxels(&scene.moving_primitives(), cell);
-        let statics: BTreeSet<VoxelKey> = surface::surface_voxels(&scene.base.primitives(), cell)
+        let base = scene.base.primitives();
+        let statics: BTreeSet<VoxelKey> = surface::surface_voxels(&base, cell)
             .difference(&moving)
             .copied()
             .collect();
@@ -187,13 +195,31 @@ impl Watch {
             .iter()
             .map(|f| f.iter().map(index).collect())
             .collect();
+        let mut across = vec![Vec::new(); keys.len()];
+        for (a, b) in surface::face_pairs(&base, cell) {
+            if let (Ok(i), Ok(j)) = (keys.binary_search(&a), keys.binary_search(&b)) {
+                across[i].push(j);
+                across[j].push(i);
+            }
+        }
         Watch {
             cell,
             keys,
             former,
             statics,
             near,
+            across,
         }
+    }
+
+    /// Static voxels occupied in `frozen` and not in `dynamic` (readings of `keys`) whose
+    /// partner across a voxel face the static surface lies on is occupied in `dynamic`.
+    fn held_across(&self, frozen: &[bool], dynamic: &[bool]) -> usize {
+        let lost = |&i: &usize| frozen[i] && !dynamic[i];
+        let statics = self.statics.iter().copied().filter(lost);
+        statics
+            .filter(|&i| self.across[i].iter().any(|&j| dynamic[j]))
+            .count()
     }
 
     /// Which watched voxels `map` holds occupied.
@@ -503,6 +529,7 @@ fn score(
         (kept.len(), lost)
     };
     let (static_voxels, static_lost) = lost(&watch.statics);
+    let static_held_across = watch.held_across(&frozen_end, &dyn_end);
     let events = events
         .iter()
         .enumerate()
@@ -562,6 +589,7 @@ fn score(
         events,
         static_voxels,
         static_lost,
+        static_held_across,
         metrics: None,
     }
 }
@@ -602,8 +630,8 @@ impl DynamicsReport {
         s += "mIoU / invR / mPAcc (%) of the final map rendered into every frame of the dynamic \
               walk, into its frames once nothing moves any more (settled), and of the frozen \
               run's map into the frozen walk.\n\n";
-        s += "| map | cell | static loss | dynamic | settled | frozen |\n";
-        s += "|---|---:|---:|---:|---:|---:|\n";
+        s += "| map | cell | static loss | held across a face | dynamic | settled | frozen |\n";
+        s += "|---|---:|---:|---:|---:|---:|---:|\n";
         for m in &self.mappers {
             let three = |x: &Metrics| {
                 format!(
@@ -618,10 +646,11 @@ impl DynamicsReport {
                 None => std::array::from_fn(|_| "-".to_string()),
             };
             s += &format!(
-                "| {} | {:.2} | {} | {} |\n",
+                "| {} | {:.2} | {} | {} | {} |\n",
                 m.name,
                 m.cell,
                 share(m.static_lost, m.static_voxels),
+                m.static_held_across,
                 cols.join(" | ")
             );
         }
@@ -644,6 +673,7 @@ impl DynamicsReport {
                 "cell": m.cell,
                 "static_voxels": m.static_voxels,
                 "static_lost": m.static_lost,
+                "static_held_across": m.static_held_across,
                 "dynamic": m.metrics.as_ref().map(|p| metrics(&p.dynamic)),
                 "settled": m.metrics.as_ref().map(|p| metrics(&p.settled)),
                 "frozen": m.metrics.as_ref().map(|p| metrics(&p.frozen)),

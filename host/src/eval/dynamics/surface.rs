@@ -23,12 +23,49 @@ const FACE_SLACK: f32 = 1e-3;
 /// ```
 pub fn surface_voxels(prims: &[Primitive], h: f32) -> BTreeSet<VoxelKey> {
     let mut out = BTreeSet::new();
+    for_each_sample(prims, h, |sides| out.extend(sides.into_iter().flatten()));
+    out
+}
+
+/// The pairs of voxels of edge `h` on the two sides of a voxel face that the surface of
+/// a shape in `prims` lies on: either voxel holds that part of the surface (its points
+/// fall on both sides, each with half of the range noise). Each pair once, smaller key
+/// first.
+///
+/// ```
+/// use sndt_host::dataset::synthetic::geometry::Primitive;
+/// use sndt_host::eval::dynamics::surface::face_pairs;
+/// use sndt_core::VoxelKey;
+/// // A 0.2 m square in the plane z = 0.3 (on a boundary at 0.1 m): 2 x 2 pairs of
+/// // voxels one above the other (its edges, on boundaries too, add the pairs beside).
+/// let square = Primitive::axis_box([0.05, 0.05, 0.3], [0.15, 0.15, 0.3], 1, 1);
+/// let pairs = face_pairs(&[square], 0.1);
+/// let (below, above) = (VoxelKey { x: 1, y: 1, z: 2 }, VoxelKey { x: 1, y: 1, z: 3 });
+/// assert!(pairs.contains(&(below, above)));
+/// assert!(pairs.iter().all(|(a, b)| a < b));
+/// ```
+pub fn face_pairs(prims: &[Primitive], h: f32) -> BTreeSet<(VoxelKey, VoxelKey)> {
+    let mut out = BTreeSet::new();
+    for_each_sample(prims, h, |sides| {
+        if let [Some(a), Some(b)] = sides
+            && a != b
+        {
+            out.insert((a.min(b), a.max(b)));
+        }
+    });
+    out
+}
+
+/// Calls `visit` with the voxels just behind and just in front of every surface sample
+/// of every shape in `prims` (a sample every third of a cell of edge `h`): the same voxel
+/// twice unless the sample lies on a voxel face.
+fn for_each_sample(prims: &[Primitive], h: f32, mut visit: impl FnMut([Option<VoxelKey>; 2])) {
     let step = h / SAMPLES_PER_CELL;
     let mut add = |p: [f32; 3], n: [f32; 3]| {
-        for s in [-FACE_SLACK, FACE_SLACK] {
+        visit([-FACE_SLACK, FACE_SLACK].map(|s| {
             let q = [p[0] + s * n[0], p[1] + s * n[1], p[2] + s * n[2]];
-            out.extend(VoxelKey::from_point(&q, h));
-        }
+            VoxelKey::from_point(&q, h)
+        }));
     };
     for prim in prims {
         match prim.shape {
@@ -74,7 +111,6 @@ pub fn surface_voxels(prims: &[Primitive], h: f32) -> BTreeSet<VoxelKey> {
             }
         }
     }
-    out
 }
 
 /// `-half ..= half` in steps of at most `step`, both ends included.
@@ -106,6 +142,27 @@ mod tests {
         assert!(v
             .iter()
             .all(|k| (-1..=20).contains(&k.x) && (-1..=10).contains(&k.z)));
+    }
+
+    /// The same wall: every pair across its plane, one voxel on each side, and no pair
+    /// but across a face (its edges on boundaries add pairs across those).
+    #[test]
+    fn face_pairs_lie_across_the_plane() {
+        let thin = Primitive::axis_box([0.0, 0.3, 0.0], [2.0, 0.3, 1.0], 1, 1);
+        let pairs = face_pairs(&[thin], 0.1);
+        for x in 0..20 {
+            for z in 0..10 {
+                let (a, b) = (VoxelKey { x, y: 2, z }, VoxelKey { x, y: 3, z });
+                assert!(pairs.contains(&(a, b)), "{x} {z}");
+            }
+        }
+        for (a, b) in &pairs {
+            let d = [b.x - a.x, b.y - a.y, b.z - a.z];
+            assert_eq!(d.iter().map(|v| v.abs()).sum::<i16>(), 1, "{a:?} {b:?}");
+        }
+        // A cube off the boundaries has no face on one.
+        let cube = Primitive::axis_box([0.05; 3], [0.25; 3], 1, 1);
+        assert!(face_pairs(&[cube], 0.1).is_empty());
     }
 
     /// An upright cylinder of radius 0.24 centred in a voxel column: its side passes
