@@ -407,6 +407,47 @@ fn core_matches_reference_with_the_see_through_miss_on_the_dynamic_room() {
     assert!(occ >= 0.995, "occupancy agreement {occ} < 99.5 %");
 }
 
+/// The camera of the hand tests of depth images: 3x3 pixels, fx = fy = 10, principal
+/// point at the centre.
+const THREE_BY_THREE: Pinhole = Pinhole {
+    fx: 10.0,
+    fy: 10.0,
+    cx: 1.5,
+    cy: 1.5,
+    width: 3,
+    height: 3,
+};
+
+/// The defaults with the see-through miss at -3.
+fn see_through_config() -> Config {
+    Config {
+        see_through_miss: -3.0,
+        ..Config::DEFAULT
+    }
+}
+
+/// A planar depth image of [`THREE_BY_THREE`] (row by row) with top-1 labels.
+fn planar_image<'a>(depth: &'a [f32], labels: &'a [u8]) -> sndt_core::DepthImage<'a> {
+    use sndt_core::{Depth, DepthImage, DepthKind, LabelImage};
+    DepthImage {
+        camera: THREE_BY_THREE,
+        depth: Depth::Metres(depth),
+        kind: DepthKind::Planar,
+        labels: LabelImage::Top1(labels),
+        stride: 1,
+    }
+}
+
+/// The sensor-frame points of [`planar_image`]'s pixels, row by row.
+fn image_points(depth: &[f32]) -> Vec<[f32; 3]> {
+    let pixels = (0..9u32).zip(depth);
+    let point = |(i, &d): (u32, &f32)| {
+        let ray = THREE_BY_THREE.ray(i % 3, i / 3);
+        sndt_core::depth_point(ray, d, sndt_core::DepthKind::Planar).unwrap()
+    };
+    pixels.map(point).collect()
+}
+
 /// The see-through test of a depth image, by hand. A, at the upper clamp after five
 /// frames of `six_points`, gets no points in a 3x3 image of a wall (fx = fy = 10, principal
 /// point at the centre, planar depth `d` everywhere). The only ray through A runs along
@@ -419,19 +460,7 @@ fn core_matches_reference_with_the_see_through_miss_on_the_dynamic_room() {
 /// the noise margin) A keeps its clamp; so it does with the same points and no image.
 #[test]
 fn depth_image_sees_through_the_mean_by_hand() {
-    use sndt_core::{depth_point, Depth, DepthImage, DepthKind, LabelImage};
-    let config = Config {
-        see_through_miss: -3.0,
-        ..Config::DEFAULT
-    };
-    let camera = Pinhole {
-        fx: 10.0,
-        fy: 10.0,
-        cx: 1.5,
-        cy: 1.5,
-        width: 3,
-        height: 3,
-    };
+    let config = see_through_config();
     for (d, with_image, want) in [(2.15f32, true, 0.5), (1.18, true, 3.5), (2.15, false, 3.5)] {
         let mut r = RefMap::new(config, 40);
         let mut core: Box<SmallMap> = sndt_host::mapping::boxed_map(config).unwrap();
@@ -442,19 +471,9 @@ fn depth_image_sees_through_the_mean_by_hand() {
                 .unwrap();
         }
         close(r.log_odds(&[0, 0, 10]), 3.5, 1e-9, "the clamp");
-        let depth = [d; 9];
-        let labels = [2u8; 9];
-        let image = DepthImage {
-            camera,
-            depth: Depth::Metres(&depth),
-            kind: DepthKind::Planar,
-            labels: LabelImage::Top1(&labels),
-            stride: 1,
-        };
-        let points: Vec<[f32; 3]> = (0..3)
-            .flat_map(|row| (0..3).map(move |col| (col, row)))
-            .map(|(col, row)| depth_point(camera.ray(col, row), d, DepthKind::Planar).unwrap())
-            .collect();
+        let (depth, labels) = ([d; 9], [2u8; 9]);
+        let image = planar_image(&depth, &labels);
+        let points = image_points(&depth);
         let pose = Isometry3::identity();
         if with_image {
             r.integrate_seen(&pose, &pts(&points, 2), Some(&image))
@@ -482,19 +501,7 @@ fn depth_image_sees_through_the_mean_by_hand() {
 /// margin of its mean), keeps its clamp.
 #[test]
 fn see_through_spreads_to_a_hidden_neighbour_of_the_same_class_by_hand() {
-    use sndt_core::{depth_point, Depth, DepthImage, DepthKind, LabelImage};
-    let config = Config {
-        see_through_miss: -3.0,
-        ..Config::DEFAULT
-    };
-    let camera = Pinhole {
-        fx: 10.0,
-        fy: 10.0,
-        cx: 1.5,
-        cy: 1.5,
-        width: 3,
-        height: 3,
-    };
+    let config = see_through_config();
     let b_points: Vec<[f32; 3]> = six_points()
         .iter()
         .map(|p| [p[0] + 0.1, p[1], p[2]])
@@ -513,23 +520,8 @@ fn see_through_spreads_to_a_hidden_neighbour_of_the_same_class_by_hand() {
             .map(|i| if i % 3 == 2 { column_2 } else { 2.15 })
             .collect();
         let labels = [2u8; 9];
-        let image = DepthImage {
-            camera,
-            depth: Depth::Metres(&depth),
-            kind: DepthKind::Planar,
-            labels: LabelImage::Top1(&labels),
-            stride: 1,
-        };
-        let points: Vec<[f32; 3]> = (0..9u32)
-            .map(|i| {
-                depth_point(
-                    camera.ray(i % 3, i / 3),
-                    depth[i as usize],
-                    DepthKind::Planar,
-                )
-            })
-            .map(Option::unwrap)
-            .collect();
+        let image = planar_image(&depth, &labels);
+        let points = image_points(&depth);
         let pose = Isometry3::identity();
         r.integrate_seen(&pose, &pts(&points, 2), Some(&image))
             .unwrap();
