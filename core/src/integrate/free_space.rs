@@ -540,7 +540,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
                 .and_then(|vs| self.voxels.get(vs))
             {
                 Some(v) if v.n >= cfg.n_min && argmax(&v.hist).map(|c| c.0) == class => {
-                    v.prepared(cfg).mean
+                    v.gaussian(cfg.cell_size, cfg.quant_step()).mean
                 }
                 _ => continue,
             };
