@@ -70,6 +70,26 @@ fn see_through_miss_clears_what_moved_and_keeps_the_static_scene() {
             p.name
         );
     }
+    // The fresh twins start at the first change and never see the night stand: as
+    // published, the map keeps the stand's votes where the box now stands and never
+    // relabels it within the walk, while its twin does. Events without a new object
+    // have no relabel figure either way.
+    for m in [published, see] {
+        for (e, event) in m.events.iter().zip(&report.events) {
+            let applies = event.new.is_some() && event.first == report.events[0].first;
+            assert_eq!(
+                e.fresh_frames_to_relabel.is_some(),
+                applies,
+                "{}: {table}",
+                e.name
+            );
+        }
+    }
+    let box_event = &published.events[1];
+    assert!(
+        box_event.frames_to_relabel.is_none() && box_event.fresh_frames_to_relabel.is_some(),
+        "{table}"
+    );
     // The moved chair and the person: published NDT-OM misses reach their thin former
     // voxels only from the rare ray through them, and they stay all the walk; with the
     // see-through miss the pixels through their Gaussians' means see the floor and the

@@ -20,7 +20,10 @@
 //!   depth), the frames until the ghost is at most 5 % (1: cleared by that frame itself);
 //! - **frames to relabel** (S-NDT only, OctoMap has no classes): from the first frame that
 //!   shows the new object (at least [`MIN_VISIBLE`] of the pixels), the frames until at
-//!   least 95 % of its pixels render with its class;
+//!   least 95 % of its pixels render with its class. Beside it, the same figure for a
+//!   twin of the map started afresh at that frame (*fresh*): it never saw the old object,
+//!   so it relabels as fast as the view and the cell size allow, and the difference is
+//!   what the map's memory of the old object costs;
 //! - **static loss**: static-surface voxels occupied at the end of the frozen run but not
 //!   at the end of the dynamic one, as a share of those occupied in the frozen run; per
 //!   event, counted within 0.3 m of the event's region;
@@ -94,6 +97,11 @@ pub struct EventResult {
     /// Frames to relabel, counted from the first frame that shows the new object;
     /// `None`: no new object, a map without classes, or not within the walk.
     pub frames_to_relabel: Option<u32>,
+    /// The same for a twin of the map started afresh at the event's first frame, which
+    /// never saw the old object; `None` as above, and for events whose first frame is not
+    /// the twin's (the twin starts at the earliest first frame of the events with a new
+    /// object).
+    pub fresh_frames_to_relabel: Option<u32>,
     /// Static voxels near the event occupied at the end of the frozen run.
     pub static_voxels: usize,
     /// Of those, free or unknown at the end of the dynamic run.
@@ -266,10 +274,11 @@ struct Run {
 /// Maps the walk of `split` with every mapper at once (each frame rendered once), reading
 /// the watched voxels after every frame; with `events`, also the new objects' relabelled
 /// share and which frames see through each event's vacated space (per watch). Writes the
-/// world points to `points` for OctoMap.
+/// world points to `points` for OctoMap. A map with a restart frame is emptied before
+/// that frame and gives no final metrics (a fresh twin, see [`EventResult`]).
 fn run_walk(
     split: &Synthetic,
-    maps: &mut [(Box<HostMap>, &Watch)],
+    maps: &mut [(Box<HostMap>, &Watch, Option<u32>)],
     labels: LabelSource,
     events: &[Event],
     mut points: Option<&mut PointsWriter>,
@@ -283,13 +292,17 @@ fn run_walk(
         if let Some(w) = points.as_deref_mut() {
             w.add_frame(&frame)?;
         }
-        for (watch_seen, (_, watch)) in seen.iter_mut().zip(maps.iter()) {
+        for (watch_seen, (_, watch, _)) in seen.iter_mut().zip(maps.iter()) {
             let row = (0..events.len())
                 .map(|e| id.index >= events[e].vacated && watch.sees_through(e, &frame))
                 .collect();
             watch_seen.push(row);
         }
-        for ((map, watch), run) in maps.iter_mut().zip(&mut runs) {
+        for ((map, watch, restart), run) in maps.iter_mut().zip(&mut runs) {
+            if *restart == Some(id.index) {
+                let config = *map.config();
+                map.reset(config).map_err(|e| anyhow!("fresh twin: {e}"))?;
+            }
             integrate_frame(map, &frame, labels, 1)?;
             run.trace.push(watch.read(map));
             let shown = events
@@ -317,7 +330,11 @@ fn run_walk(
         progress();
     }
     let settle = events.iter().map(|e| e.vacated).max().unwrap_or(0);
-    for ((map, _), run) in maps.iter().zip(&mut runs) {
+    let scored = maps
+        .iter()
+        .zip(&mut runs)
+        .filter(|((_, _, r), _)| r.is_none());
+    for ((map, _, _), run) in scored {
         for frame in &kept {
             if let Some(gt) = &frame.labels {
                 let mut one = Confusion::default();
@@ -396,14 +413,19 @@ pub fn run(
         let (d, f) = (&dynamic.runs[i], &still.runs[i]);
         let traces = (&d.trace[..], &f.trace[..]);
         let watch = watch_of(m.config.cell_size);
-        let relabelled = Some(&d.relabelled[..]);
+        let twin = dynamic.runs.get(i + options.mappers.len());
+        let relabelled = Relabelled {
+            map: &d.relabelled,
+            fresh: twin.map(|t| &t.relabelled[..]),
+            fresh_start: fresh_start(&scene.events),
+        };
         let mut result = score(
             &m.name,
             watch,
             &scene.events,
             traces,
             &dynamic.seen[i],
-            relabelled,
+            Some(relabelled),
         );
         result.metrics = Some(PaperMetrics {
             dynamic: d.confusion.metrics(),
@@ -480,12 +502,21 @@ fn walk_all<'w>(
     watch_of: &dyn Fn(f32) -> &'w Watch,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Walked> {
+    // On the dynamic walk, each map's fresh twin follows the maps (see `EventResult`).
+    let fresh = fresh_start(&scene.events).filter(|_| name == "dynamic");
+    let restarts = std::iter::repeat_n(None, options.mappers.len()).chain(
+        fresh
+            .map(|f| vec![Some(f); options.mappers.len()])
+            .unwrap_or_default(),
+    );
     let mut maps = options
         .mappers
         .iter()
-        .map(|m| {
+        .cycle()
+        .zip(restarts)
+        .map(|(m, restart)| {
             let map = boxed_map(m.config).map_err(|e| anyhow!("{}: {e}", m.name))?;
-            Ok((map, watch_of(m.config.cell_size)))
+            Ok((map, watch_of(m.config.cell_size), restart))
         })
         .collect::<Result<Vec<_>>>()?;
     let points = options
@@ -512,6 +543,33 @@ fn walk_all<'w>(
     Ok(Walked { runs, seen, points })
 }
 
+/// The first frame of the events with a new object: where the fresh twins start.
+fn fresh_start(events: &[Event]) -> Option<u32> {
+    events
+        .iter()
+        .filter(|e| e.new.is_some())
+        .map(|e| e.first)
+        .min()
+}
+
+/// Per event, a map's relabelled share after each frame, and its fresh twin's.
+#[derive(Clone, Copy)]
+struct Relabelled<'a> {
+    map: &'a [Vec<Option<f64>>],
+    fresh: Option<&'a [Vec<Option<f64>>]>,
+    /// The frame the twin started afresh at.
+    fresh_start: Option<u32>,
+}
+
+/// Frames to relabel from per-frame shares: from the first frame with a share until one
+/// is at least [`RELABELLED`] (1: that frame itself).
+fn relabel_count(shares: &[Option<f64>]) -> Option<u32> {
+    let shown = shares.iter().position(Option::is_some)?;
+    let mut after = shares.iter().enumerate().skip(shown);
+    let done = after.find(|(_, r)| r.is_some_and(|r| r >= RELABELLED));
+    done.map(|(t, _)| (t - shown + 1) as u32)
+}
+
 /// One map's results from its traces on the dynamic and the frozen walk.
 fn score(
     name: &str,
@@ -519,7 +577,7 @@ fn score(
     events: &[Event],
     (dynamic, frozen): (&[Vec<bool>], &[Vec<bool>]),
     seen: &[Vec<bool>],
-    relabelled: Option<&[Vec<Option<f64>>]>,
+    relabelled: Option<Relabelled>,
 ) -> MapperResult {
     let end = |t: &[Vec<bool>]| t.last().cloned().unwrap_or_default();
     let (dyn_end, frozen_end) = (end(dynamic), end(frozen));
@@ -560,15 +618,14 @@ fn score(
                 cleared.map(|(t, _)| t as u32 - s + 1)
             });
             let shares = relabelled
-                .and_then(|r| r.get(e))
+                .and_then(|r| r.map.get(e))
                 .cloned()
                 .unwrap_or_else(|| vec![None; dynamic.len()]);
-            let shown = shares.iter().position(Option::is_some);
-            let frames_to_relabel = shown.and_then(|s| {
-                let mut done = shares.iter().enumerate().skip(s);
-                let done = done.find(|(_, r)| r.is_some_and(|r| r >= RELABELLED));
-                done.map(|(t, _)| (t - s + 1) as u32)
-            });
+            let frames_to_relabel = relabel_count(&shares);
+            let fresh_frames_to_relabel = relabelled
+                .filter(|r| r.fresh_start == Some(event.first))
+                .and_then(|r| r.fresh?.get(e).map(|f| relabel_count(f)))
+                .flatten();
             let (near, near_lost) = lost(&watch.near[e]);
             EventResult {
                 name: event.name.to_string(),
@@ -578,6 +635,7 @@ fn score(
                 frames_to_clear,
                 relabelled: shares,
                 frames_to_relabel,
+                fresh_frames_to_relabel,
                 static_voxels: near,
                 static_lost: near_lost,
             }
@@ -604,12 +662,17 @@ impl DynamicsReport {
             (Some(f), true) => f.to_string(),
             (None, true) => format!("> {}", self.frames),
         };
+        // The fresh twin's figure in brackets, where it has one.
+        let relabel_frames = |r: &EventResult, applies: bool| match r.fresh_frames_to_relabel {
+            Some(fresh) if applies => format!("{} ({fresh})", frames(r.frames_to_relabel, true)),
+            _ => frames(r.frames_to_relabel, applies),
+        };
         for (e, event) in self.events.iter().enumerate() {
             s += &format!(
                 "\n### {} (vacated at frame {})\n\n",
                 event.name, event.vacated
             );
-            s += "| map | cell | former voxels | seen through at | frames to clear | frames to relabel | static loss |\n";
+            s += "| map | cell | former voxels | seen through at | frames to clear | frames to relabel (fresh) | static loss |\n";
             s += "|---|---:|---:|---:|---:|---:|---:|\n";
             for m in &self.mappers {
                 let r = &m.events[e];
@@ -621,7 +684,7 @@ impl DynamicsReport {
                     r.former,
                     r.seen_through.map_or("never".into(), |t| t.to_string()),
                     frames(r.frames_to_clear, r.former > 0),
-                    frames(r.frames_to_relabel, relabel),
+                    relabel_frames(r, relabel),
                     share(r.static_lost, r.static_voxels),
                 );
             }
@@ -683,6 +746,7 @@ impl DynamicsReport {
                     "seen_through": r.seen_through,
                     "frames_to_clear": r.frames_to_clear,
                     "frames_to_relabel": r.frames_to_relabel,
+                    "fresh_frames_to_relabel": r.fresh_frames_to_relabel,
                     "static_voxels": r.static_voxels,
                     "static_lost": r.static_lost,
                     "ghost": r.ghost,
