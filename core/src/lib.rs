@@ -46,7 +46,7 @@
 //! | `storage::record` | one block or voxel as its snapshot record ([`Record`]), the [`RecordSink`] eviction hands them to |
 //! | `storage::{map, snapshot}` | the [`Map`] struct and its queries; snapshots and their [`SnapshotHeader`] |
 //! | `storage::{merge, stream}` | [`Map::merge`] and [`Map::merge_record`]; the COBS-framed record stream for a byte link ([`StreamWriter`], [`StreamReader`]) |
-//! | `integrate::{evict, frame}` | eviction of far entries when a table is full; the state of one frame being integrated, [`FrameReport`], [`Phase`] |
+//! | `integrate::{evict, frame}` | eviction of far entries when a table is full; the state of one frame being integrated, [`FrameReport`], [`Phase`], [`Vectors`] |
 //! | `integrate::{points, accumulate_point, accumulate}` | phase 1 in batches of 64 points: [`Phase::Points`] (pixels to world points, keys and offsets in vectorisable loops), then [`Phase::Accumulate`] (into voxel sums and votes; one point at a time in `accumulate_point`, which also holds the voxel lookup and accumulators) |
 //! | `integrate::{end_voxels, free_space}` | [`Phase::EndVoxels`] (one update per touched voxel); [`Phase::FreeSpace`] (rays, NDT-OM misses) |
 //! | `integrate` | [`Map::integrate`] and [`Map::integrate_depth`] as their steps |
@@ -62,6 +62,16 @@
 //! - `defmt`: `defmt::Format` for the public types (firmware logging).
 //! - `std`: the square root of the hot loops from std, which the compiler vectorises
 //!   (`libm`'s is scalar); rendering is several times faster on a host with it.
+//!
+//! ## Vector instructions
+//!
+//! The core has no CPU-specific code: the compiler vectorises its loops for whatever the
+//! build targets. On 64-bit targets the frame update and the render are
+//! `#[inline(always)]` down their hot paths, so that a caller's function compiled with
+//! `#[target_feature(enable = "avx2")]` gets the whole update with AVX2; the `sndt-dispatch`
+//! crate does this behind a run-time CPU check, and tells the update through [`Vectors`].
+//! Every build and every [`Vectors`] give the same map bits. 32-bit targets keep the
+//! compiler's own inlining (flash is scarce there).
 //!
 //! ## Example
 //!
@@ -124,7 +134,7 @@ pub use geometry::camera::{
 };
 pub use geometry::dda::voxels_on_segment;
 pub use geometry::gaussian::Gaussian;
-pub use integrate::frame::{FrameReport, Phase, MAX_FRAME_POINTS};
+pub use integrate::frame::{FrameReport, Phase, Vectors, MAX_FRAME_POINTS};
 pub use key::{VoxelKey, KEY_LIMIT};
 pub use labels::{LabeledPoint, Labels, MAX_TOP_K};
 pub use nalgebra::{Isometry3, Matrix3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};

@@ -8,6 +8,7 @@ mod bki;
 mod capacity;
 mod crosscheck;
 mod dda;
+mod dispatch;
 mod dynamics;
 mod evaluate;
 mod fuzz;

@@ -71,6 +71,7 @@ impl<const N: usize> PrepCache<N> {
 impl Gaussian {
     /// Inverse covariance with eigenvalues raised to `ratio * lambda_max` (and to `floor_abs`
     /// for a degenerate voxel whose points coincide).
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn prepare(&self, ratio: f32, floor_abs: f32) -> Prepared {
         let (vals, vecs) = symmetric_eigen(&self.covariance);
         let lmax = max_f32(max_f32(vals[0], vals[1]), vals[2]);
@@ -109,6 +110,7 @@ pub(crate) fn floor_abs(h: f32) -> f32 {
 /// Eigenvalues and eigenvectors (columns) of a symmetric 3x3 matrix by cyclic Jacobi
 /// rotations. Pure arithmetic plus a correctly rounded square root, so results are
 /// bit-identical on every target.
+#[cfg_attr(target_pointer_width = "64", inline(always))]
 pub(crate) fn symmetric_eigen(m: &Matrix3<f32>) -> ([f32; 3], Matrix3<f32>) {
     let mut a = *m;
     let mut v = Matrix3::<f32>::identity();

@@ -11,10 +11,11 @@
 //!   10 cm), and there ending a run costs more than the additions it saves;
 //! - **by runs** (64-bit targets without 256-bit vectors): consecutive points of one
 //!   voxel are summed in registers and added to the voxel's accumulator once;
-//! - **by voxel** (targets with 256-bit vectors): once per voxel of the batch, a
-//!   branch-free pass over all 64 points sums those in the voxel. A tile of pixels covers
-//!   two to four voxels but switches between them every four points or so (surfaces
-//!   straddle voxel faces), and every switch of a run is a mispredicted branch.
+//! - **by voxel** (64-bit code with 256-bit vectors, see [`crate::Vectors`]): once per
+//!   voxel of the batch, a branch-free pass over all 64 points sums those in the voxel. A
+//!   tile of pixels covers two to four voxels but switches between them every four points
+//!   or so (surfaces straddle voxel faces), and every switch of a run is a mispredicted
+//!   branch.
 //!
 //! A point that is not the common case (beyond max range, outside the key range,
 //! non-finite, several voting classes) goes through the scalar `Map::add_point`, which
@@ -37,30 +38,32 @@ const DROPPED: usize = usize::MAX;
 const OTHER: u64 = u64::MAX;
 
 /// The first point from `j` on with something left to do (`BATCH - 1` if none).
+#[cfg_attr(target_pointer_width = "64", inline(always))]
 fn next_pending(pending: &[u64; BATCH], j: usize) -> usize {
     let rest = pending.get(j..).unwrap_or(&[]);
     (j + rest.iter().position(|&p| p != 0).unwrap_or(rest.len())).min(BATCH - 1)
 }
 
-/// Whether this target sums by voxel, or else by points (see the module documentation).
-const BY_VOXEL: bool = cfg!(target_feature = "avx2");
+/// Whether this target sums by points (see the module documentation); where it does not,
+/// the frame chooses between voxels and runs (`FrameState::by_voxel`).
 const BY_POINTS: bool = PACK_PER_POINT;
 
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// The accumulation stage for a converted batch with its labels set; `labels(index)`
     /// gives the labels of a point (see [`crate::integrate::points::Source::index`]) for the scalar
     /// path.
-    #[inline]
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
+    #[cfg_attr(not(target_pointer_width = "64"), inline)]
     pub(crate) fn accumulate(
         &mut self,
         f: &mut FrameState,
         batch: &Batch,
         labels: impl Fn(usize) -> Labels,
     ) {
-        if BY_VOXEL {
-            self.accumulate_by_voxel(f, batch, labels);
-        } else if BY_POINTS {
+        if BY_POINTS {
             self.accumulate_by_points(f, batch, labels);
+        } else if f.by_voxel {
+            self.accumulate_by_voxel(f, batch, labels);
         } else {
             self.accumulate_by_runs(f, batch, labels);
         }
@@ -143,6 +146,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     /// Accumulation point by point.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn accumulate_by_points(
         &mut self,
         f: &mut FrameState,
@@ -174,6 +178,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     /// Accumulation by runs of consecutive points in one voxel.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn accumulate_by_runs(
         &mut self,
         f: &mut FrameState,
@@ -220,6 +225,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     /// Accumulation by voxel: at the first point of each voxel, one pass over the batch.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn accumulate_by_voxel(
         &mut self,
         f: &mut FrameState,

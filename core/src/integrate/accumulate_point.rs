@@ -154,6 +154,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     /// Adds every open accumulator to its voxel.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn flush_accumulators(&mut self, f: &mut FrameState) {
         for acc in f.acc.iter_mut() {
             self.flush(acc);

@@ -11,6 +11,7 @@ use crate::storage::table::Entry;
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// Phase 2 along the sorted frame list from `head`: every voxel that received points
     /// decays to `n_max`, ends its vote sample, and gets one hit.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn update_end_voxels(&mut self, f: &mut FrameState, head: u32) {
         let cfg = self.config;
         let (lo, hi) = (to_fixed(cfg.clamp_min), to_fixed(cfg.clamp_max));

@@ -8,6 +8,7 @@
 use crate::config::to_fixed;
 use crate::error::Error;
 use crate::geometry::camera::{validate_pose, DepthImage};
+use crate::integrate::points::PACK_PER_POINT;
 use crate::key::{axis_key, floor_i32, VoxelKey, KEY_LIMIT};
 use crate::storage::block::Block;
 use crate::storage::map::Map;
@@ -92,6 +93,47 @@ pub enum Phase {
     FreeSpace,
     /// The frame is complete.
     Done,
+}
+
+/// The vector instructions the code that integrates a frame runs with. It chooses one
+/// thing, how phase 1 sums a batch's points per voxel (`accumulate.rs`), and every choice
+/// gives the same map bits; only the speed differs.
+///
+/// A crate built for a CPU with AVX2 (`-C target-cpu=native` or `x86-64-v3`) sums by voxel
+/// anyway. A program built for baseline x86-64 gets the same speed by calling
+/// [`Map::integrate_depth_with`] with [`Vectors::Wide`] from a function compiled with
+/// AVX2 enabled (`#[target_feature(enable = "avx2")]`) after checking the CPU at run time,
+/// which is what the `sndt-dispatch` crate does.
+///
+/// ```
+/// use sndt_core::*;
+/// let cam = Pinhole { fx: 4.0, fy: 4.0, cx: 4.0, cy: 3.0, width: 8, height: 6 };
+/// let depth = [2.0f32; 48];
+/// let img = DepthImage { camera: cam, depth: Depth::Metres(&depth), kind: DepthKind::Planar,
+///                        labels: LabelImage::None, stride: 1 };
+/// let mut a: Map<256, 64, 4> = Map::new(Config::DEFAULT);
+/// let mut b: Map<256, 64, 4> = Map::new(Config::DEFAULT);
+/// a.integrate_depth(&Isometry3::identity(), &img).unwrap();
+/// b.integrate_depth_with(&Isometry3::identity(), &img, None, Vectors::Wide).unwrap();
+/// assert_eq!(a.checksum(), b.checksum());
+/// ```
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Vectors {
+    /// Those this crate was compiled for: sums by voxel where `target_feature = "avx2"`.
+    #[default]
+    AsBuilt,
+    /// Vectors of 256 bits or more (AVX2, AVX-512) in the calling code: sums by voxel on
+    /// 64-bit targets. Without them that path is correct but slow.
+    Wide,
+}
+
+impl Vectors {
+    /// Whether phase 1 sums a batch's points by voxel (only 64-bit targets keep the vote
+    /// keys that needs).
+    pub(crate) fn by_voxel(self) -> bool {
+        !PACK_PER_POINT && (cfg!(target_feature = "avx2") || self == Vectors::Wide)
+    }
 }
 
 /// Open voxel accumulators per frame (see [`Accumulator`]).
@@ -233,6 +275,8 @@ pub(crate) struct FrameState<'s> {
     pub(crate) sink: Option<&'s mut dyn RecordSink>,
     /// A depth frame's image: phase 3 looks up where a surface voxel's mean projects.
     pub(crate) image: Option<DepthImage<'s>>,
+    /// Whether phase 1 sums a batch's points by voxel ([`Vectors::by_voxel`]).
+    pub(crate) by_voxel: bool,
 }
 
 impl FrameState<'_> {
@@ -276,6 +320,7 @@ impl FrameState<'_> {
 impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// Starts a frame at `pose` (sensor to world): checks the pose, keys the sensor origin
     /// and stamps the frame. Nothing in the map changes on an error.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn begin_frame<'s>(
         &mut self,
         pose: &Isometry3<f32>,
@@ -322,6 +367,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
             evicted_before: (self.stats.voxels_evicted, self.stats.blocks_evicted),
             sink: None,
             image: None,
+            by_voxel: Vectors::AsBuilt.by_voxel(),
         })
     }
 
@@ -420,6 +466,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
 
     /// Calls `visit(map, slot, block)` for every block on the frame's list from `head`, in
     /// list order, with a copy of the block as it is when reached.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn for_each_frame_block(
         &mut self,
         head: u32,
@@ -437,6 +484,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     /// Bottom-up merge sort of the frame's block list by packed key (no allocation).
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn sort_frame_list(&mut self, head: u32) -> u32 {
         // A damaged link ends a run (`next`) and sorts last (`key`) instead of halting.
         let key = |m: &Self, i: u32| m.blocks.linked(i).map_or(u64::MAX, Entry::packed_key);
@@ -495,6 +543,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
 
     /// Ends the frame: counts it and its losses in the map's totals, and completes its
     /// report with the evictions it caused.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn close_frame(&mut self, f: &mut FrameState) -> FrameReport {
         self.stats.frames = self.stats.frames.wrapping_add(1);
         self.stats.dropped_points += f.report.dropped_points as u64;

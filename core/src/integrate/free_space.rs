@@ -42,6 +42,7 @@ struct Segment {
 
 impl Segment {
     /// The segment from the frame's sensor to `target` (voxel units) in voxel `end`.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn new(f: &FrameState, target: [f32; 3], end: &VoxelKey, include_end: bool) -> Segment {
         let k = f.origin_key;
         Segment {
@@ -54,7 +55,8 @@ impl Segment {
     }
 
     /// The steps of its walk: one per voxel boundary between `start` and `end`.
-    #[inline]
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
+    #[cfg_attr(not(target_pointer_width = "64"), inline)]
     fn steps(&self) -> u32 {
         (0..3)
             .map(|a| (self.end[a] - self.start[a]).unsigned_abs())
@@ -78,6 +80,7 @@ impl Segment {
     /// The segment as a ray in world metres, for an NDT-OM miss. Built when a miss needs
     /// it, not per segment: most rays meet no Gaussian, and on a Cortex-M4 the square
     /// root is a software call.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn ray(&self, f: &FrameState) -> Ray {
         let (o, target) = (self.o, self.target);
         let d = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
@@ -147,6 +150,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// `head`: to every hit voxel, then to every truncated end that got no points. On
     /// 64-bit targets the rays go [`LANES`] at a time through [`lane_keys`] and are then
     /// walked one by one, in the same order.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn clear_free_space(&mut self, f: &mut FrameState, head: u32) {
         let mut cache = GaussCache::new();
         let mut pending = Pending {
@@ -177,6 +181,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// units), giving each traversed voxel its miss; `end` itself only if `include_end`.
     /// Walked now on 32-bit targets, else with the rays pending before it, once
     /// [`LANES`] are pending.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn cast(
         &mut self,
         f: &mut FrameState,
@@ -203,6 +208,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
 
     /// Walks the pending rays in order, the voxels of their walks (up to [`LANE_STEPS`]
     /// steps) found for all of them at once.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn walk_pending(&mut self, f: &mut FrameState, cache: &mut GaussCache, pending: &mut Pending) {
         let segments = pending.segments.get(..pending.len).unwrap_or(&[]);
         if segments.is_empty() {
@@ -235,6 +241,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// pass rules those out without branches (a block's `missed` mask, from the frame's
     /// block cache, only grows during a frame) and lists the rest in `todo`; the second
     /// goes through that list as the scalar walk would, block lookups and all.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn walk_keys(
         &mut self,
         f: &mut FrameState,
@@ -273,6 +280,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     /// Walks one segment, checking the key range only where it may be left.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn walk_one(&mut self, f: &mut FrameState, cache: &mut GaussCache, seg: &Segment) {
         if seg.near_limit() {
             self.walk_checked(f, cache, seg);
@@ -298,6 +306,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// one to a field, and a field at 3 means the step leaves the block (the field wraps
     /// to 0 and the block key steps). Masks and increments are then constants, which
     /// leaves registers for the rest on 32-bit targets.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn walk(&mut self, f: &mut FrameState, cache: &mut GaussCache, seg: &Segment) {
         let start = seg.start;
         let dda = seg.dda();
@@ -389,6 +398,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// [`Map::walk`] for a segment that may leave the key range: the voxel-by-voxel
     /// [`traverse`], stopping at the first voxel outside the range (an axis moves
     /// monotonically, so nothing valid follows).
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn walk_checked(&mut self, f: &mut FrameState, cache: &mut GaussCache, seg: &Segment) {
         traverse(
             seg.o,
@@ -612,6 +622,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
 /// inverse gives no direction (`a <= 0`, NaN), `Ok(None)` when the closest approach lies
 /// beyond the ray's end.
 #[allow(clippy::result_unit_err)]
+#[cfg_attr(target_pointer_width = "64", inline(always))]
 fn closest_approach(cfg: &Config, ray: &Ray, g: &Prepared) -> Result<Option<(f32, f32)>, ()> {
     let u = Vector3::new(ray.dir[0], ray.dir[1], ray.dir[2]);
     let s = Vector3::new(ray.origin[0], ray.origin[1], ray.origin[2]);
@@ -639,6 +650,7 @@ fn closest_approach(cfg: &Config, ray: &Ray, g: &Prepared) -> Result<Option<(f32
 /// ellipsoid of radius [`SEE_THROUGH_SURFACE`] ([`SEE_THROUGH_HALO`] for a voxel already
 /// `doubted`) and ends well beyond it (`p_z < 1/2`); `None` otherwise (a ray past the
 /// ellipsoid, one ending near it or before it): the voxel waits for the frame's next ray.
+#[cfg_attr(target_pointer_width = "64", inline(always))]
 fn see_through_miss(cfg: &Config, ray: &Ray, g: &Prepared, doubted: bool) -> Option<f32> {
     match closest_approach(cfg, ray, g) {
         Err(()) => Some(cfg.miss),
@@ -688,6 +700,7 @@ const SEE_THROUGH_DOUBT: f32 = 1.0;
 
 /// NDT-OM miss log-odds for a ray through a voxel's Gaussian, or `None` when the point of
 /// the ray closest to the Gaussian lies beyond the ray's end.
+#[cfg_attr(target_pointer_width = "64", inline(always))]
 fn ndt_om_miss(cfg: &Config, ray: &Ray, g: &Prepared) -> Option<f32> {
     let (t, p_z) = match closest_approach(cfg, ray, g) {
         Err(()) => return Some(cfg.miss),
@@ -710,6 +723,7 @@ fn ndt_om_miss(cfg: &Config, ray: &Ray, g: &Prepared) -> Option<f32> {
 /// clears in 2 frames, not 14. A surface still there gives the pixel its own depth (a
 /// plane through the mean meets the pixel's ray at the mean), one hidden behind something
 /// gives a nearer depth: neither passes.
+#[cfg_attr(target_pointer_width = "64", inline(always))]
 fn seen_through(cfg: &Config, f: &FrameState, image: &DepthImage<'_>, mean: &Vector3<f32>) -> bool {
     pixel_depth(cfg, f, image, mean)
         .is_some_and(|(measured, along, margin)| measured > along + margin)
@@ -718,6 +732,7 @@ fn seen_through(cfg: &Config, f: &FrameState, image: &DepthImage<'_>, mean: &Vec
 /// Whether the pixel `mean` projects to hides it: measured nearer than the mean by more
 /// than a cell plus twice the range noise (false outside the image and for a pixel
 /// without a depth).
+#[cfg_attr(target_pointer_width = "64", inline(always))]
 fn pixel_hides(cfg: &Config, f: &FrameState, image: &DepthImage<'_>, mean: &Vector3<f32>) -> bool {
     pixel_depth(cfg, f, image, mean)
         .is_some_and(|(measured, along, margin)| measured < along - margin)
@@ -726,6 +741,7 @@ fn pixel_hides(cfg: &Config, f: &FrameState, image: &DepthImage<'_>, mean: &Vect
 /// The depth measured at the pixel `mean` projects to, the mean's own depth along that
 /// pixel's ray, and the margin a cell plus twice the range noise; `None` outside the
 /// image or without a finite depth.
+#[cfg_attr(target_pointer_width = "64", inline(always))]
 fn pixel_depth(
     cfg: &Config,
     f: &FrameState,
@@ -791,11 +807,13 @@ fn has_bit(word: usize, cell: u32) -> bool {
 }
 
 /// Centre of a voxel in voxel units.
+#[cfg_attr(target_pointer_width = "64", inline(always))]
 fn centre(key: &VoxelKey) -> [f32; 3] {
     [key.x as f32 + 0.5, key.y as f32 + 0.5, key.z as f32 + 0.5]
 }
 
 /// Mean of a voxel's points in voxel units, kept strictly inside the voxel.
+#[cfg_attr(target_pointer_width = "64", inline(always))]
 fn mean_in_voxel<const C: usize>(v: &Voxel<C>, key: &VoxelKey, qscale: f32) -> [f32; 3] {
     let n = v.n.max(1) as f32;
     let k = [key.x as f32, key.y as f32, key.z as f32];

@@ -37,7 +37,7 @@ pub(crate) mod free_space;
 
 use crate::error::Error;
 use crate::geometry::camera::{DepthImage, LabelImage, PixelRays};
-use crate::integrate::frame::{FrameReport, FrameState, Phase, MAX_FRAME_POINTS};
+use crate::integrate::frame::{FrameReport, FrameState, Phase, Vectors, MAX_FRAME_POINTS};
 use crate::integrate::points::{Batch, BATCH, TILE_COLS};
 use crate::labels::{LabeledPoint, Labels};
 use crate::storage::map::Map;
@@ -68,7 +68,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         pose: &Isometry3<f32>,
         points: &[LabeledPoint],
     ) -> Result<FrameReport, Error> {
-        self.integrate_points(pose, points, |_| {}, None)
+        self.integrate_points(pose, points, |_| {}, (None, Vectors::AsBuilt))
     }
 
     /// Integrates a depth image with labels (see [`DepthImage`]); invalid depths are
@@ -78,7 +78,43 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         pose: &Isometry3<f32>,
         image: &DepthImage<'_>,
     ) -> Result<FrameReport, Error> {
-        self.integrate_depth_image(pose, image, |_| {}, None)
+        self.integrate_depth_image(pose, image, |_| {}, (None, Vectors::AsBuilt))
+    }
+
+    /// [`Map::integrate`] with an optional sink ([`Map::integrate_spilling`]), for code
+    /// running with the vector instructions `vectors` (see [`Vectors`]; the map is the
+    /// same whatever they are).
+    ///
+    /// ```
+    /// use sndt_core::*;
+    /// let mut map: Map<64, 16, 4> = Map::new(Config::DEFAULT);
+    /// let pts = [LabeledPoint::new(Point3::new(0.0, 0.0, 1.0), Labels::top1(1))];
+    /// let r = map.integrate_with(&Isometry3::identity(), &pts, None, Vectors::Wide).unwrap();
+    /// assert_eq!(r.points_used, 1);
+    /// ```
+    #[inline(always)]
+    pub fn integrate_with(
+        &mut self,
+        pose: &Isometry3<f32>,
+        points: &[LabeledPoint],
+        sink: Option<&mut dyn RecordSink>,
+        vectors: Vectors,
+    ) -> Result<FrameReport, Error> {
+        self.integrate_points(pose, points, |_| {}, (sink, vectors))
+    }
+
+    /// [`Map::integrate_depth`] with an optional sink ([`Map::integrate_depth_spilling`]),
+    /// for code running with the vector instructions `vectors` (see [`Vectors`], which has
+    /// an example).
+    #[inline(always)]
+    pub fn integrate_depth_with(
+        &mut self,
+        pose: &Isometry3<f32>,
+        image: &DepthImage<'_>,
+        sink: Option<&mut dyn RecordSink>,
+        vectors: Vectors,
+    ) -> Result<FrameReport, Error> {
+        self.integrate_depth_image(pose, image, |_| {}, (sink, vectors))
     }
 
     /// [`Map::integrate`] that hands every voxel and block it evicts to `sink` as a
@@ -110,7 +146,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         points: &[LabeledPoint],
         sink: &mut dyn RecordSink,
     ) -> Result<FrameReport, Error> {
-        self.integrate_points(pose, points, |_| {}, Some(sink))
+        self.integrate_points(pose, points, |_| {}, (Some(sink), Vectors::AsBuilt))
     }
 
     /// [`Map::integrate_depth`] that hands every voxel and block it evicts to `sink`, as
@@ -121,7 +157,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         image: &DepthImage<'_>,
         sink: &mut dyn RecordSink,
     ) -> Result<FrameReport, Error> {
-        self.integrate_depth_image(pose, image, |_| {}, Some(sink))
+        self.integrate_depth_image(pose, image, |_| {}, (Some(sink), Vectors::AsBuilt))
     }
 
     /// [`Map::integrate`], reporting the start of every [`Phase`] to `on_phase` (for
@@ -132,22 +168,24 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         points: &[LabeledPoint],
         on_phase: impl FnMut(Phase),
     ) -> Result<FrameReport, Error> {
-        self.integrate_points(pose, points, on_phase, None)
+        self.integrate_points(pose, points, on_phase, (None, Vectors::AsBuilt))
     }
 
-    /// The steps of [`Map::integrate`], with an observer and a sink.
+    /// The steps of [`Map::integrate`], with an observer, a sink and the vectors.
+    #[inline(always)]
     fn integrate_points(
         &mut self,
         pose: &Isometry3<f32>,
         points: &[LabeledPoint],
         mut on_phase: impl FnMut(Phase),
-        sink: Option<&mut dyn RecordSink>,
+        (sink, vectors): (Option<&mut dyn RecordSink>, Vectors),
     ) -> Result<FrameReport, Error> {
         if points.len() > MAX_FRAME_POINTS {
             return Err(Error::FrameTooLarge);
         }
         let mut f = self.begin_frame(pose)?;
         f.sink = sink;
+        f.by_voxel = vectors.by_voxel();
         let mut batch = Batch::new();
         for chunk in points.chunks(BATCH) {
             on_phase(Phase::Points);
@@ -180,23 +218,26 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         image: &DepthImage<'_>,
         on_phase: impl FnMut(Phase),
     ) -> Result<FrameReport, Error> {
-        self.integrate_depth_image(pose, image, on_phase, None)
+        self.integrate_depth_image(pose, image, on_phase, (None, Vectors::AsBuilt))
     }
 
-    /// The steps of [`Map::integrate_depth`], with an observer and a sink.
-    fn integrate_depth_image<'s>(
+    /// The steps of [`Map::integrate_depth`], with an observer, a sink and the vectors.
+    #[inline(always)]
+    fn integrate_depth_image(
         &mut self,
         pose: &Isometry3<f32>,
-        image: &DepthImage<'s>,
+        image: &DepthImage<'_>,
         mut on_phase: impl FnMut(Phase),
-        sink: Option<&'s mut dyn RecordSink>,
+        (sink, vectors): (Option<&mut dyn RecordSink>, Vectors),
     ) -> Result<FrameReport, Error> {
         image.validate()?;
         if image.samples() > MAX_FRAME_POINTS {
             return Err(Error::FrameTooLarge);
         }
         let mut f = self.begin_frame(pose)?;
-        f.sink = sink;
+        // The cast shortens the sink's lifetime to the image's where that is shorter.
+        f.sink = sink.map(|s| s as &mut dyn RecordSink);
+        f.by_voxel = vectors.by_voxel();
         f.image = Some(*image);
         let rays = PixelRays::new(&image.camera);
         let mut batch = Batch::new();
@@ -224,6 +265,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
 
     /// The labels and vote keys of a batch of pixels with top-k labels (one-class labels
     /// came with the tile, and their vote keys with the conversion).
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn set_pixel_labels(&self, batch: &mut Batch, image: &DepthImage<'_>) {
         match image.labels {
             LabelImage::None | LabelImage::Top1(_) => {}
@@ -235,6 +277,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     /// The accumulation stage for a batch of pixels, with the image's labels.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn accumulate_pixels(&mut self, f: &mut FrameState, batch: &Batch, image: &DepthImage<'_>) {
         match image.labels {
             LabelImage::None => self.accumulate(f, batch, |_| Labels::NONE),
@@ -248,6 +291,7 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     /// Phases 2 and 3 after the frame's last point, then the frame's totals.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn finish(
         &mut self,
         f: &mut FrameState,

@@ -101,6 +101,7 @@ impl Source {
     };
 
     /// The pixel (or point) index of point `j` (only needed off the fast path).
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn index(&self, j: usize) -> usize {
         let (row, col) = (j / self.cols.max(1), j % self.cols.max(1));
         self.first + row * self.row_step + col * self.col_step
@@ -126,6 +127,7 @@ impl Batch {
     }
 
     /// Loads `points` (at most [`BATCH`]).
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn load_points(&mut self, points: &[LabeledPoint]) {
         self.len = points.len().min(BATCH);
         self.source = Source::POINTS;
@@ -142,6 +144,7 @@ impl Batch {
     /// column `col0` on, in each of the `rows` from `row0` on (as many as fit), as
     /// [`crate::depth_point`] turns them into points, with their one-class labels (if
     /// the image has those).
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn load_tile(
         &mut self,
         image: &DepthImage<'_>,
@@ -317,6 +320,7 @@ impl Batch {
     /// frame's sensor is near its edge (`FrameState::keys_in_range`): a point within max
     /// range of it cannot leave the range otherwise (on a Cortex-M4F, the checks cost about 7
     /// instructions per point).
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn convert(&mut self, f: &FrameState, classes: usize) {
         if f.keys_in_range {
             self.convert_checking::<false>(f, classes);
@@ -410,6 +414,7 @@ impl Batch {
     /// The packed keys and [`packed_offsets`] of every lane, from the 32-bit lanes, in
     /// 64-bit lanes (the conversion runs in 32-bit lanes, twice as many per vector
     /// instruction).
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn fill_wide_lanes(&mut self) {
         let Batch {
             key,
@@ -431,6 +436,7 @@ impl Batch {
     /// Labels from `labels(pixel)` for every point (see [`Source::index`]), checked against
     /// the map's class count and turned into the class each votes for; a point with several
     /// voting classes takes the scalar path.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn set_labels(
         &mut self,
         labels: impl Fn(usize) -> Labels,
@@ -486,12 +492,14 @@ impl Batch {
     }
 
     /// The sensor point of point `j`.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn point(&self, j: usize) -> [f32; 3] {
         [self.p[0][j], self.p[1][j], self.p[2][j]]
     }
 }
 
 /// Lanes `start..end` of one coordinate of a batch (none if out of range).
+#[cfg_attr(target_pointer_width = "64", inline(always))]
 fn lanes(p: &mut [f32; BATCH], start: usize, end: usize) -> &mut [f32] {
     p.get_mut(start..end).unwrap_or(&mut [])
 }

@@ -78,6 +78,7 @@ impl<T: Entry, const N: usize> Table<T, N> {
         self.len as usize >= N
     }
 
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn bucket(packed: u64) -> usize {
         ((hash(packed) as u64 * N as u64) >> 32) as usize
     }
@@ -114,6 +115,7 @@ impl<T: Entry, const N: usize> Table<T, N> {
     }
 
     /// Slot index of `packed`, if present.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn find(&self, packed: u64) -> Option<usize> {
         let mut i = self.bucket_head(packed);
         let want = order(packed);

@@ -138,6 +138,7 @@ impl<const C: usize> Voxel<C> {
 
     /// Ends the frame's sample: the next frame samples so that a voxel seen as densely
     /// takes about `votes_per_frame` votes.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn end_vote_sample(&mut self, votes_per_frame: u8) {
         let taken = self.tally & VOTES_TAKEN_MAX;
         let next = next_vote_exponent(self.vote_exponent(), taken, votes_per_frame);
@@ -159,6 +160,7 @@ impl<const C: usize> Voxel<C> {
     /// Halves every bin if any bin exceeds `255 - votes` so a frame's sample of about
     /// `votes` votes has room (done once per voxel per frame, before the votes, so the
     /// result does not depend on point order).
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn make_vote_room(&mut self, votes: u8) {
         if any_bin_above(&self.hist, 255 - votes) {
             for b in self.hist.iter_mut() {
@@ -172,6 +174,7 @@ impl<const C: usize> Voxel<C> {
 /// `b + (255 - limit)` carries out of its byte, and the carries out of the four byte
 /// additions of two words come from their top bits and the carries into them (the sums
 /// of their low 7 bits, which cannot reach the next byte).
+#[cfg_attr(target_pointer_width = "64", inline(always))]
 fn any_bin_above(hist: &[u8], limit: u8) -> bool {
     let v = u32::from_ne_bytes([255 - limit; 4]);
     let low7 = 0x7f7f_7f7f;

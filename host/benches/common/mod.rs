@@ -27,9 +27,8 @@ pub fn integrate_all(map: &mut HostMap, frames: &[Frame]) -> Vec<f64> {
         .map(|f| {
             let img = image(f);
             let t = Instant::now();
-            let report = map
-                .integrate_depth(&f.pose, &img)
-                .expect("frame integrates");
+            let report =
+                sndt_dispatch::integrate_depth(map, &f.pose, &img, None).expect("frame integrates");
             let ms = t.elapsed().as_secs_f64() * 1e3;
             assert_eq!(
                 report.dropped_points + report.voxels_evicted,

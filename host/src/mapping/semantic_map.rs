@@ -190,19 +190,11 @@ pub fn integrate_frame_spilling<const V: usize, const B: usize, const C: usize>(
                 labels,
                 stride,
             };
-            match sink {
-                Some(sink) => map.integrate_depth_spilling(&frame.pose, &image, sink),
-                None => map.integrate_depth(&frame.pose, &image),
-            }
-            .map_err(err)
+            sndt_dispatch::integrate_depth(map, &frame.pose, &image, sink).map_err(err)
         }
         Rays::PerPixel { .. } => {
             let points = frame.camera_points(source, stride);
-            match sink {
-                Some(sink) => map.integrate_spilling(&frame.pose, &points, sink),
-                None => map.integrate(&frame.pose, &points),
-            }
-            .map_err(err)
+            sndt_dispatch::integrate(map, &frame.pose, &points, sink).map_err(err)
         }
     }
 }
@@ -227,7 +219,7 @@ pub fn backproject<const V: usize, const B: usize, const C: usize>(
             match frame.rays.as_ref() {
                 Rays::Pinhole(cam) => {
                     let mut dist = vec![0f32; out.len()];
-                    map.render_rows(&frame.pose, cam, row0 as u32, out, &mut dist)
+                    sndt_dispatch::render_rows(map, &frame.pose, cam, row0 as u32, out, &mut dist)
                         .map_err(|e| anyhow!("{}: render: {e:?}", frame.id))
                 }
                 Rays::PerPixel { .. } => {

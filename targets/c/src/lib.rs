@@ -461,7 +461,7 @@ pub unsafe extern "C" fn sndt_integrate_depth(
         // error leaves both as they were.
         let s = unsafe { storage_mut(map) }?;
         unsafe { write_opt(report, sndt_frame_report::default()) }?;
-        let r = s.map.integrate_depth(&pose, &image)?;
+        let r = sndt_dispatch::integrate_depth(&mut s.map, &pose, &image, None)?;
         unsafe { write_opt(report, r.into()) }
     })
 }
@@ -506,7 +506,7 @@ pub unsafe extern "C" fn sndt_integrate_points(
         // SAFETY: the caller's promises; the buffers are disjoint (checked).
         let s = unsafe { storage_mut(map) }?;
         unsafe { write_opt(report, sndt_frame_report::default()) }?;
-        let r = s.map.integrate(&pose, pts)?;
+        let r = sndt_dispatch::integrate(&mut s.map, &pose, pts, None)?;
         unsafe { write_opt(report, r.into()) }
     })
 }
@@ -612,8 +612,8 @@ pub unsafe extern "C" fn sndt_render(
         // SAFETY: the caller's promises; the two buffers and the map are disjoint (checked).
         let (labels, distance) =
             unsafe { (slice_mut(labels, pixels)?, slice_mut(distance, pixels)?) };
-        s.map
-            .render_rows(&pose, &camera.to_core(), first_row, labels, distance)
+        let camera = camera.to_core();
+        sndt_dispatch::render_rows(&s.map, &pose, &camera, first_row, labels, distance)
             .map_err(sndt_status::from)
     })
 }
