@@ -66,8 +66,8 @@
 //! ## Vector instructions
 //!
 //! The core has no CPU-specific code: the compiler vectorises its loops for whatever the
-//! build targets. On 64-bit targets the frame update and the render are
-//! `#[inline(always)]` down their hot paths, so that a caller's function compiled with
+//! build targets. On 64-bit targets the frame update is `#[inline(always)]` down its hot
+//! path, so that a caller's function compiled with
 //! `#[target_feature(enable = "avx2")]` gets the whole update with AVX2; the `sndt-dispatch`
 //! crate does this behind a run-time CPU check, and tells the update through [`Vectors`].
 //! Every build and every [`Vectors`] give the same map bits. 32-bit targets keep the

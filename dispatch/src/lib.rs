@@ -32,9 +32,7 @@
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
-use sndt_core::{
-    DepthImage, Error, FrameReport, Isometry3, LabeledPoint, Map, Pinhole, RecordSink,
-};
+use sndt_core::{DepthImage, Error, FrameReport, Isometry3, LabeledPoint, Map, Phase, RecordSink};
 
 /// The code a frame's update runs as, from the slowest to the fastest.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -114,6 +112,37 @@ pub fn integrate_depth_at<const V: usize, const B: usize, const C: usize>(
     }
 }
 
+/// [`Map::integrate_depth_observed`] at `level`, or at the fastest level this CPU runs
+/// if that is lower: the phases of a frame timed as the dispatched update runs them.
+///
+/// ```
+/// use sndt_core::*;
+/// let cam = Pinhole { fx: 4.0, fy: 4.0, cx: 4.0, cy: 3.0, width: 8, height: 6 };
+/// let img = DepthImage { camera: cam, depth: Depth::Metres(&[2.0f32; 48]),
+///                        kind: DepthKind::Planar, labels: LabelImage::None, stride: 1 };
+/// let mut map: Map<256, 64, 4> = Map::new(Config::DEFAULT);
+/// let mut seen = Vec::new();
+/// let (level, pose) = (sndt_dispatch::level(), Isometry3::identity());
+/// sndt_dispatch::integrate_depth_observed_at(level, &mut map, &pose, &img, |p| seen.push(p))
+///     .unwrap();
+/// assert_eq!(seen.last(), Some(&Phase::Done));
+/// ```
+pub fn integrate_depth_observed_at<const V: usize, const B: usize, const C: usize>(
+    level: Level,
+    map: &mut Map<V, B, C>,
+    pose: &Isometry3<f32>,
+    image: &DepthImage<'_>,
+    on_phase: impl FnMut(Phase),
+) -> Result<FrameReport, Error> {
+    #[cfg(target_arch = "x86_64")]
+    return x86::integrate_depth_observed(level.min(self::level()), map, (pose, image), on_phase);
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = level;
+        map.integrate_depth_observed(pose, image, on_phase)
+    }
+}
+
 /// [`Map::integrate`] (with a sink, [`Map::integrate_spilling`]) at the fastest
 /// [`level`]: the same map and report.
 ///
@@ -158,54 +187,5 @@ pub fn integrate_at<const V: usize, const B: usize, const C: usize>(
     {
         let _ = level;
         map.integrate_with(pose, points, sink, sndt_core::Vectors::AsBuilt)
-    }
-}
-
-/// [`Map::render_rows`] at the fastest [`level`]: the same pixels.
-///
-/// ```
-/// use sndt_core::*;
-/// let cam = Pinhole { fx: 40.0, fy: 40.0, cx: 4.0, cy: 3.0, width: 8, height: 6 };
-/// let img = DepthImage { camera: cam, depth: Depth::Metres(&[2.0f32; 48]), kind: DepthKind::Planar,
-///                        labels: LabelImage::Top1(&[7u8; 48]), stride: 1 };
-/// let mut map: Map<256, 64, 40> = Map::new(Config::DEFAULT);
-/// map.integrate_depth(&Isometry3::identity(), &img).unwrap();
-/// let (mut out, mut dist) = ([0u8; 48], [0f32; 48]);
-/// sndt_dispatch::render_rows(&map, &Isometry3::identity(), &cam, 0, &mut out, &mut dist).unwrap();
-/// assert!(out.iter().filter(|&&c| c == 7).count() > 30);
-/// ```
-pub fn render_rows<const V: usize, const B: usize, const C: usize>(
-    map: &Map<V, B, C>,
-    pose: &Isometry3<f32>,
-    camera: &Pinhole,
-    first_row: u32,
-    labels: &mut [u8],
-    distance: &mut [f32],
-) -> Result<(), Error> {
-    render_rows_at(level(), map, pose, camera, first_row, labels, distance)
-}
-
-/// [`render_rows`] at `level`, or at the fastest level this CPU runs if that is lower.
-pub fn render_rows_at<const V: usize, const B: usize, const C: usize>(
-    level: Level,
-    map: &Map<V, B, C>,
-    pose: &Isometry3<f32>,
-    camera: &Pinhole,
-    first_row: u32,
-    labels: &mut [u8],
-    distance: &mut [f32],
-) -> Result<(), Error> {
-    #[cfg(target_arch = "x86_64")]
-    return x86::render_rows(
-        level.min(self::level()),
-        map,
-        (pose, camera, first_row),
-        labels,
-        distance,
-    );
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        let _ = level;
-        map.render_rows(pose, camera, first_row, labels, distance)
     }
 }

@@ -9,11 +9,11 @@
 
 use crate::Level;
 use sndt_core::{
-    DepthImage, Error, FrameReport, Isometry3, LabeledPoint, Map, Pinhole, RecordSink, Vectors,
+    DepthImage, Error, FrameReport, Isometry3, LabeledPoint, Map, Phase, RecordSink, Vectors,
 };
 
-/// What a render needs besides its buffers: the pose, the camera and the first row.
-type View<'a> = (&'a Isometry3<f32>, &'a Pinhole, u32);
+/// A depth frame: its pose and its image.
+type DepthFrame<'a, 'i> = (&'a Isometry3<f32>, &'a DepthImage<'i>);
 
 cpufeatures::new!(avx2_cpu, "avx", "avx2", "fma", "bmi1", "bmi2", "popcnt");
 cpufeatures::new!(avx512_cpu, "avx512f", "avx512bw", "avx512cd", "avx512dq", "avx512vl");
@@ -61,42 +61,39 @@ pub(crate) fn integrate<const V: usize, const B: usize, const C: usize>(
     }
 }
 
-/// [`Map::render_rows`] at `level`, which must not exceed [`level`].
-pub(crate) fn render_rows<const V: usize, const B: usize, const C: usize>(
+/// [`Map::integrate_depth_observed_with`] at `level`, which must not exceed [`level`].
+pub(crate) fn integrate_depth_observed<const V: usize, const B: usize, const C: usize>(
     level: Level,
-    map: &Map<V, B, C>,
-    view: View<'_>,
-    labels: &mut [u8],
-    distance: &mut [f32],
-) -> Result<(), Error> {
+    map: &mut Map<V, B, C>,
+    frame: DepthFrame<'_, '_>,
+    on_phase: impl FnMut(Phase),
+) -> Result<FrameReport, Error> {
     match level {
         // SAFETY: `level` is at most `level()`, so the CPU has these features.
-        Level::Avx512 => unsafe { render_avx512(map, view, labels, distance) },
+        Level::Avx512 => unsafe { observed_avx512(map, frame, on_phase) },
         // SAFETY: as above.
-        Level::Avx2 => unsafe { render_avx2(map, view, labels, distance) },
-        Level::Baseline => map.render_rows(view.0, view.1, view.2, labels, distance),
+        Level::Avx2 => unsafe { observed_avx2(map, frame, on_phase) },
+        Level::Baseline => map.integrate_depth_observed(frame.0, frame.1, on_phase),
     }
 }
 
 #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,popcnt")]
-fn render_avx2<const V: usize, const B: usize, const C: usize>(
-    map: &Map<V, B, C>,
-    (pose, camera, first_row): View<'_>,
-    labels: &mut [u8],
-    distance: &mut [f32],
-) -> Result<(), Error> {
-    map.render_rows(pose, camera, first_row, labels, distance)
+fn observed_avx2<const V: usize, const B: usize, const C: usize>(
+    map: &mut Map<V, B, C>,
+    (pose, image): DepthFrame<'_, '_>,
+    on_phase: impl FnMut(Phase),
+) -> Result<FrameReport, Error> {
+    map.integrate_depth_observed_with(pose, image, on_phase, Vectors::Wide)
 }
 
 #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,popcnt")]
 #[target_feature(enable = "avx512f,avx512bw,avx512cd,avx512dq,avx512vl")]
-fn render_avx512<const V: usize, const B: usize, const C: usize>(
-    map: &Map<V, B, C>,
-    (pose, camera, first_row): View<'_>,
-    labels: &mut [u8],
-    distance: &mut [f32],
-) -> Result<(), Error> {
-    map.render_rows(pose, camera, first_row, labels, distance)
+fn observed_avx512<const V: usize, const B: usize, const C: usize>(
+    map: &mut Map<V, B, C>,
+    (pose, image): DepthFrame<'_, '_>,
+    on_phase: impl FnMut(Phase),
+) -> Result<FrameReport, Error> {
+    map.integrate_depth_observed_with(pose, image, on_phase, Vectors::Wide)
 }
 
 #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,popcnt")]

@@ -8,7 +8,8 @@
 //! memory and, per cell size (5, 10, 20 cm), single thread:
 //! - a warm-up pass into a fresh heap map ([`HostMap`]), then `reset`, so the timed pass
 //!   finds the map's memory touched;
-//! - a timed pass: one `integrate_depth` per frame (every pixel, ground-truth labels,
+//! - a timed pass: one `integrate_depth` per frame through `sndt-dispatch` (at the CPU's
+//!   fastest level, or at most `SNDT_LEVEL`: `baseline`, `avx2`, `avx512`; every pixel, ground-truth labels,
 //!   `Config::with_cell_size(cell)`: statistics, classes and free space up to
 //!   `max_range`), nothing else inside the clock.
 //!
@@ -42,10 +43,11 @@ fn main() {
         .map_or(12, |n| n.parse().expect("FRAMES is a number"));
     let frames = load(spec, count);
     println!(
-        "sndt frames={} pixels={} max_range={} threads=1",
+        "sndt frames={} pixels={} max_range={} threads=1 level={:?}",
         frames.len(),
         frames[0].pixels(),
-        Config::DEFAULT.max_range
+        Config::DEFAULT.max_range,
+        common::level()
     );
     for cell in CELLS {
         bench_cell(&frames, cell);

@@ -26,9 +26,10 @@ fn main() {
     let frames = living_room();
     let pixels = frames[0].pixels();
     println!(
-        "sndt-core update benchmark: synthetic living room, {} frames of {} pixels, one thread",
+        "sndt-core update benchmark: synthetic living room, {} frames of {} pixels, one thread, level {:?}",
         frames.len(),
-        pixels
+        pixels,
+        common::level()
     );
     println!(
         "{:>5} | {:>7} {:>7} {:>7} | {:>6} {:>10} {:>9} {:>9} {:>7} | {:>6} {:>7} {:>6}",
@@ -87,15 +88,22 @@ fn bench_cell(frames: &[Frame], cell: f32) {
     for f in frames {
         let mut last = Instant::now();
         let mut current: Option<Phase> = None;
-        let r = map
-            .integrate_depth_observed(&f.pose, &image(f), |p| {
-                let now = Instant::now();
-                if let Some(c) = current {
-                    phases[c as usize] += now - last;
-                }
-                (last, current) = (now, Some(p));
-            })
-            .expect("frame integrates");
+        let on_phase = |p| {
+            let now = Instant::now();
+            if let Some(c) = current {
+                phases[c as usize] += now - last;
+            }
+            (last, current) = (now, Some(p));
+        };
+        let level = common::level();
+        let r = sndt_dispatch::integrate_depth_observed_at(
+            level,
+            &mut map,
+            &f.pose,
+            &image(f),
+            on_phase,
+        )
+        .expect("frame integrates");
         assert_eq!(
             r.dropped_points + r.voxels_evicted,
             0,

@@ -720,7 +720,7 @@ fn render(
         .enumerate()
         .try_for_each(|(i, (l, d))| {
             let row0 = (i * band) as u32;
-            each_map!(map, m => sndt_dispatch::render_rows(m, pose, camera, row0, l, d))?;
+            each_map!(map, m => m.render_rows(pose, camera, row0, l, d))?;
             for (k, (label, dist)) in l.iter().zip(d.iter_mut()).enumerate() {
                 let (col, row) = ((k % w) as u32, row0 + (k / w) as u32);
                 *dist = if *label == INVALID_LABEL || !dist.is_finite() {

@@ -7,7 +7,7 @@
 use sndt_core::{
     Config, Depth, DepthImage, FrameReport, LabelImage, Labels, Map, Record, RecordSink,
 };
-use sndt_dispatch::{integrate_at, integrate_depth_at, level, render_rows_at, Level};
+use sndt_dispatch::{integrate_at, integrate_depth_at, level, Level};
 use sndt_host::dataset::frame::{Frame, Rays};
 use sndt_host::dataset::{Dataset, LabelSource};
 use sndt_host::mapping::{boxed_map, HostMap};
@@ -131,38 +131,4 @@ fn every_level_evicts_and_spills_the_same() {
         runs.iter().all(|r| *r == runs[0]),
         "levels evict differently"
     );
-}
-
-/// Renders of the same map at every level give the same labels and distances, bit for bit.
-#[test]
-fn every_level_renders_the_same_pixels() {
-    let frames = frames();
-    let mut map: Box<HostMap> = boxed_map(Config::with_cell_size(0.1)).unwrap();
-    for f in &frames {
-        depth_frame(Level::Baseline, &mut *map, f, LabelSource::Gt, None);
-    }
-    for f in &frames {
-        let Rays::Pinhole(camera) = f.rays.as_ref() else {
-            panic!("a synthetic frame has a pinhole camera");
-        };
-        let renders: Vec<(Vec<u8>, Vec<u32>)> = levels()
-            .into_iter()
-            .map(|l| {
-                let (mut labels, mut dist) = (vec![0u8; f.pixels()], vec![0f32; f.pixels()]);
-                render_rows_at(l, &*map, &f.pose, camera, 0, &mut labels, &mut dist).unwrap();
-                (labels, dist.iter().map(|d| d.to_bits()).collect())
-            })
-            .collect();
-        let hits = renders[0]
-            .0
-            .iter()
-            .filter(|&&c| c != sndt_core::INVALID_LABEL)
-            .count();
-        assert!(hits > f.pixels() / 2, "{}: {hits} pixels hit", f.id);
-        assert!(
-            renders.iter().all(|r| *r == renders[0]),
-            "{}: levels render differently",
-            f.id
-        );
-    }
 }

@@ -8,7 +8,6 @@
 use crate::config::to_fixed;
 use crate::error::Error;
 use crate::geometry::camera::{validate_pose, DepthImage};
-use crate::integrate::points::PACK_PER_POINT;
 use crate::key::{axis_key, floor_i32, VoxelKey, KEY_LIMIT};
 use crate::storage::block::Block;
 use crate::storage::map::Map;
@@ -129,10 +128,10 @@ pub enum Vectors {
 }
 
 impl Vectors {
-    /// Whether phase 1 sums a batch's points by voxel (only 64-bit targets keep the vote
-    /// keys that needs).
+    /// Whether phase 1 sums a batch's points by voxel where it does not sum them one by
+    /// one (32-bit targets do, whatever this says: see `accumulate.rs`).
     pub(crate) fn by_voxel(self) -> bool {
-        !PACK_PER_POINT && (cfg!(target_feature = "avx2") || self == Vectors::Wide)
+        cfg!(target_feature = "avx2") || self == Vectors::Wide
     }
 }
 

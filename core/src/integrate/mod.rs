@@ -221,6 +221,31 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
         self.integrate_depth_image(pose, image, on_phase, (None, Vectors::AsBuilt))
     }
 
+    /// [`Map::integrate_depth_observed`] for code running with the vector instructions
+    /// `vectors` (see [`Vectors`]).
+    ///
+    /// ```
+    /// use sndt_core::*;
+    /// let cam = Pinhole { fx: 4.0, fy: 4.0, cx: 4.0, cy: 3.0, width: 8, height: 6 };
+    /// let img = DepthImage { camera: cam, depth: Depth::Metres(&[2.0f32; 48]),
+    ///                        kind: DepthKind::Planar, labels: LabelImage::None, stride: 1 };
+    /// let mut map: Map<256, 64, 4> = Map::new(Config::DEFAULT);
+    /// let mut phases = 0;
+    /// let pose = Isometry3::identity();
+    /// map.integrate_depth_observed_with(&pose, &img, |_| phases += 1, Vectors::Wide).unwrap();
+    /// assert_eq!(phases, 5);
+    /// ```
+    #[inline(always)]
+    pub fn integrate_depth_observed_with(
+        &mut self,
+        pose: &Isometry3<f32>,
+        image: &DepthImage<'_>,
+        on_phase: impl FnMut(Phase),
+        vectors: Vectors,
+    ) -> Result<FrameReport, Error> {
+        self.integrate_depth_image(pose, image, on_phase, (None, vectors))
+    }
+
     /// The steps of [`Map::integrate_depth`], with an observer, a sink and the vectors.
     #[inline(always)]
     fn integrate_depth_image(

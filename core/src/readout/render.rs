@@ -46,7 +46,6 @@ struct View {
 }
 
 impl View {
-    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn new(pose: &Isometry3<f32>, camera: &Pinhole, rows: (u32, u32), r2: f32, max_t: f32) -> View {
         let rot = pose.rotation.to_rotation_matrix();
         let c = camera;
@@ -72,7 +71,6 @@ impl View {
     }
 
     /// Whether a ball of radius `radius` around `mean` lies outside the rendered view.
-    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn culls(&self, mean: &Vector3<f32>, radius: f32) -> bool {
         let m = mean - self.origin;
         let dist = m.norm();
@@ -86,7 +84,7 @@ impl View {
 
     /// The unit rays of pixels `col..col + LANES` of row `row` (NaN for a ray that has
     /// none), computed as [`Map::raycast`] gets them from [`View::ray`]: the same bits.
-    #[cfg_attr(target_pointer_width = "64", inline(always))]
+    #[inline(always)]
     fn unit_rays(&self, col: u32, row: u32) -> Lanes3 {
         let c = &self.camera;
         let m = self.rot.matrix();
@@ -112,7 +110,7 @@ impl View {
         u
     }
 
-    #[cfg_attr(target_pointer_width = "64", inline(always))]
+    #[inline(always)]
     fn ray(&self, col: u32, row: u32) -> Vector3<f32> {
         let r = self.camera.ray(col, row);
         self.rot * Vector3::new(r[0], r[1], r[2])
@@ -172,7 +170,6 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     /// map.render_rows(&Isometry3::identity(), &cam, 2, &mut rows, &mut dist).unwrap();
     /// assert_eq!(rows, all[16..32]);
     /// ```
-    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub fn render_rows(
         &self,
         pose: &Isometry3<f32>,
@@ -208,7 +205,6 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
     }
 
     /// Draws every occupied surface voxel that may be seen into the z-buffer `distance`.
-    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn draw_all(&self, view: &View, labels: &mut [u8], distance: &mut [f32]) {
         let cfg = &self.config;
         let (h, step) = (cfg.cell_size, cfg.quant_step());
@@ -252,7 +248,6 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
 
     /// Turns the z-buffer into the output: no hit is (`INVALID_LABEL`, 0); a pixel where
     /// two Gaussians tied (flagged by a negative distance) is cast by [`Map::raycast`].
-    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn resolve(&self, view: &View, labels: &mut [u8], distance: &mut [f32]) {
         // `max(1)`: a view has pixels (checked), and a division by 0 would panic.
         let w = (view.camera.width as usize).max(1);
@@ -274,7 +269,6 @@ impl<const V: usize, const B: usize, const C: usize> Map<V, B, C> {
 /// Tests the pixels of `p`'s footprint and keeps the nearer hits. A hit at exactly the
 /// distance already kept flags the pixel (negative distance) for `resolve`: ties
 /// are decided by key, which the z-buffer does not hold.
-#[cfg_attr(target_pointer_width = "64", inline(always))]
 fn draw(view: &View, p: &Prep, labels: &mut [u8], distance: &mut [f32]) {
     let fp = Footprint::new(&p.inv, &p.d, view.r2, &view.t, view.rows, view.camera.width);
     let w = view.camera.width as usize;

@@ -38,7 +38,6 @@ pub(crate) struct Footprint {
 
 /// `T = R K^-1` of a camera with rotation `rot` (camera to world) and pinhole `fx, fy,
 /// cx, cy`, by columns: the world ray of pixel coordinate `(X, Y)` is `T (X, Y, 1)`.
-#[cfg_attr(target_pointer_width = "64", inline(always))]
 pub(crate) fn pixel_to_ray(rot: &Matrix3<f32>, k: [f32; 4]) -> [Vector3<f64>; 3] {
     let r = rot.map(|v| v as f64);
     let [fx, fy, cx, cy] = k.map(|v| v as f64);
@@ -50,7 +49,6 @@ impl Footprint {
     /// The footprint of the ellipsoid with inverse covariance `inv`, seen from a centre at
     /// `d` from its mean, radius `r2` (squared), in rows `rows` (first, one past the last)
     /// of an image `width` wide whose pixel rays are `t` ([`pixel_to_ray`]).
-    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn new(
         inv: &Matrix3<f32>,
         d: &Vector3<f32>,
@@ -89,7 +87,6 @@ impl Footprint {
     /// The rows `(Y min, Y max)` of the conic when it is a bounded ellipse (the ellipsoid
     /// entirely ahead of the camera), from its horizontal tangents: the lines
     /// `l = (0, 1, -Y)` with `l^T adj(P) l = 0`.
-    #[cfg_attr(target_pointer_width = "64", inline(always))]
     fn ellipse_rows(&self) -> Option<(f64, f64)> {
         let [a, b, c, d, e, f] = self.p;
         if self.inside || !(a < 0.0 && a * d - b * b > 0.0) {
@@ -106,7 +103,6 @@ impl Footprint {
     }
 
     /// The column spans of row `row` that may be covered (at most two).
-    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub(crate) fn spans(&self, row: u32) -> [Span; 2] {
         let full = (0, self.width);
         if self.inside {
@@ -170,7 +166,6 @@ impl Footprint {
 }
 
 /// `v` as a pixel index: negative to 0, beyond `u32` (or infinite) to `u32::MAX`, NaN to 0.
-#[cfg_attr(target_pointer_width = "64", inline(always))]
 fn to_pixel(v: f64) -> u32 {
     if v >= u32::MAX as f64 {
         u32::MAX

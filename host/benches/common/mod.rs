@@ -1,6 +1,7 @@
 //! What the update benches share: a frame as the core's depth image, and one timed pass.
 
 use sndt_core::{Depth, DepthImage, LabelImage};
+use sndt_dispatch::Level;
 use sndt_host::dataset::frame::{Frame, Rays};
 use sndt_host::mapping::HostMap;
 use std::time::Instant;
@@ -19,16 +20,30 @@ pub fn image(frame: &Frame) -> DepthImage<'_> {
     }
 }
 
+/// The level the update runs at (`sndt-dispatch`): the CPU's fastest, or lower if the
+/// environment's `SNDT_LEVEL` says so (`baseline`, `avx2`, `avx512`), to time what a CPU
+/// without AVX-512 or AVX2 would run.
+pub fn level() -> Level {
+    let cap = match std::env::var("SNDT_LEVEL").as_deref() {
+        Ok("baseline") => Level::Baseline,
+        Ok("avx2") => Level::Avx2,
+        Ok("avx512") | Err(_) => Level::Avx512,
+        Ok(other) => panic!("SNDT_LEVEL={other}: baseline, avx2 or avx512"),
+    };
+    cap.min(sndt_dispatch::level())
+}
+
 /// Integrates every frame; the time of each in ms. Panics if the map dropped or evicted
 /// anything (the benchmark would then time a smaller map).
 pub fn integrate_all(map: &mut HostMap, frames: &[Frame]) -> Vec<f64> {
+    let level = level();
     frames
         .iter()
         .map(|f| {
             let img = image(f);
             let t = Instant::now();
-            let report =
-                sndt_dispatch::integrate_depth(map, &f.pose, &img, None).expect("frame integrates");
+            let report = sndt_dispatch::integrate_depth_at(level, map, &f.pose, &img, None)
+                .expect("frame integrates");
             let ms = t.elapsed().as_secs_f64() * 1e3;
             assert_eq!(
                 report.dropped_points + report.voxels_evicted,

@@ -219,7 +219,7 @@ pub fn backproject<const V: usize, const B: usize, const C: usize>(
             match frame.rays.as_ref() {
                 Rays::Pinhole(cam) => {
                     let mut dist = vec![0f32; out.len()];
-                    sndt_dispatch::render_rows(map, &frame.pose, cam, row0 as u32, out, &mut dist)
+                    map.render_rows(&frame.pose, cam, row0 as u32, out, &mut dist)
                         .map_err(|e| anyhow!("{}: render: {e:?}", frame.id))
                 }
                 Rays::PerPixel { .. } => {

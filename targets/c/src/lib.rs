@@ -27,9 +27,11 @@
 //!
 //! # Safety
 //!
-//! All `unsafe` of sndt lives in this crate: turning the caller's pointers into references
-//! and slices after checking them for NULL, alignment and size. What the library cannot
-//! check is the caller's promise that a pointer refers to as many valid bytes as it says.
+//! The `unsafe` of this crate turns the caller's pointers into references and slices after
+//! checking them for NULL, alignment and size. What the library cannot check is the
+//! caller's promise that a pointer refers to as many valid bytes as it says. (The only
+//! other `unsafe` of sndt is `sndt-dispatch`'s call into its AVX2 or AVX-512 copy of the
+//! update after checking the CPU, which the map updates here go through.)
 #![cfg_attr(not(test), no_std)]
 #![deny(unsafe_op_in_unsafe_fn)]
 #![allow(non_camel_case_types)]
@@ -612,8 +614,8 @@ pub unsafe extern "C" fn sndt_render(
         // SAFETY: the caller's promises; the two buffers and the map are disjoint (checked).
         let (labels, distance) =
             unsafe { (slice_mut(labels, pixels)?, slice_mut(distance, pixels)?) };
-        let camera = camera.to_core();
-        sndt_dispatch::render_rows(&s.map, &pose, &camera, first_row, labels, distance)
+        s.map
+            .render_rows(&pose, &camera.to_core(), first_row, labels, distance)
             .map_err(sndt_status::from)
     })
 }
