@@ -77,63 +77,45 @@ pub(crate) fn integrate_depth_observed<const V: usize, const B: usize, const C: 
     }
 }
 
-#[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,popcnt")]
-fn observed_avx2<const V: usize, const B: usize, const C: usize>(
-    map: &mut Map<V, B, C>,
-    (pose, image): DepthFrame<'_, '_>,
-    on_phase: impl FnMut(Phase),
-) -> Result<FrameReport, Error> {
-    map.integrate_depth_observed_with(pose, image, on_phase, Vectors::Wide)
+/// Defines `$avx2` and `$avx512`, each `$body` compiled with its level's target features
+/// (`V`, `B`, `C` are the map's capacities).
+macro_rules! per_level {
+    ($avx2:ident, $avx512:ident, ($($arg:ident: $ty:ty),*) $body:block) => {
+        #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,popcnt")]
+        fn $avx2<const V: usize, const B: usize, const C: usize>(
+            $($arg: $ty),*
+        ) -> Result<FrameReport, Error> $body
+
+        #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,popcnt")]
+        #[target_feature(enable = "avx512f,avx512bw,avx512cd,avx512dq,avx512vl")]
+        fn $avx512<const V: usize, const B: usize, const C: usize>(
+            $($arg: $ty),*
+        ) -> Result<FrameReport, Error> $body
+    };
 }
 
-#[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,popcnt")]
-#[target_feature(enable = "avx512f,avx512bw,avx512cd,avx512dq,avx512vl")]
-fn observed_avx512<const V: usize, const B: usize, const C: usize>(
+per_level!(observed_avx2, observed_avx512, (
     map: &mut Map<V, B, C>,
-    (pose, image): DepthFrame<'_, '_>,
-    on_phase: impl FnMut(Phase),
-) -> Result<FrameReport, Error> {
-    map.integrate_depth_observed_with(pose, image, on_phase, Vectors::Wide)
-}
+    frame: DepthFrame<'_, '_>,
+    on_phase: impl FnMut(Phase)
+) {
+    map.integrate_depth_observed_with(frame.0, frame.1, on_phase, Vectors::Wide)
+});
 
-#[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,popcnt")]
-fn depth_avx2<const V: usize, const B: usize, const C: usize>(
+per_level!(depth_avx2, depth_avx512, (
     map: &mut Map<V, B, C>,
     pose: &Isometry3<f32>,
     image: &DepthImage<'_>,
-    sink: Option<&mut dyn RecordSink>,
-) -> Result<FrameReport, Error> {
+    sink: Option<&mut dyn RecordSink>
+) {
     map.integrate_depth_with(pose, image, sink, Vectors::Wide)
-}
+});
 
-#[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,popcnt")]
-#[target_feature(enable = "avx512f,avx512bw,avx512cd,avx512dq,avx512vl")]
-fn depth_avx512<const V: usize, const B: usize, const C: usize>(
-    map: &mut Map<V, B, C>,
-    pose: &Isometry3<f32>,
-    image: &DepthImage<'_>,
-    sink: Option<&mut dyn RecordSink>,
-) -> Result<FrameReport, Error> {
-    map.integrate_depth_with(pose, image, sink, Vectors::Wide)
-}
-
-#[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,popcnt")]
-fn points_avx2<const V: usize, const B: usize, const C: usize>(
+per_level!(points_avx2, points_avx512, (
     map: &mut Map<V, B, C>,
     pose: &Isometry3<f32>,
     points: &[LabeledPoint],
-    sink: Option<&mut dyn RecordSink>,
-) -> Result<FrameReport, Error> {
+    sink: Option<&mut dyn RecordSink>
+) {
     map.integrate_with(pose, points, sink, Vectors::Wide)
-}
-
-#[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,popcnt")]
-#[target_feature(enable = "avx512f,avx512bw,avx512cd,avx512dq,avx512vl")]
-fn points_avx512<const V: usize, const B: usize, const C: usize>(
-    map: &mut Map<V, B, C>,
-    pose: &Isometry3<f32>,
-    points: &[LabeledPoint],
-    sink: Option<&mut dyn RecordSink>,
-) -> Result<FrameReport, Error> {
-    map.integrate_with(pose, points, sink, Vectors::Wide)
-}
+});
