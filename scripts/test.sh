@@ -99,6 +99,15 @@ bash scripts/dynamics.sh
 step "aarch64: sndt-core tests (unit, property, doc) and the CRC check under qemu-aarch64"
 bash scripts/aarch64.sh
 
+step "sndt-dispatch built for baseline x86-64: SSE2 by runs, AVX2 and AVX-512 by voxel, the same map"
+# The workspace builds for this CPU (.cargo/config.toml); RUSTFLAGS="" builds the baseline
+# that crates depending on sndt get, whose as-built level is SSE2.
+if [ "$(uname -m)" = x86_64 ]; then
+    RUSTFLAGS="" cargo test -p sndt-dispatch --test same_bits --target-dir target/baseline
+else
+    echo "not an x86-64 machine: skipped"
+fi
+
 step "fuzzing smoke: every target over its corpus plus bounded runs (run beside the steps above)"
 await fuzz
 
