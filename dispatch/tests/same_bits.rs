@@ -114,7 +114,11 @@ fn frame(i: usize) -> (Vec<f32>, Vec<u8>) {
 fn every_level_maps_and_spills_the_same() {
     // The maps are built on the stack before they are boxed: room for them.
     let big_stack = std::thread::Builder::new().stack_size(64 << 20);
-    big_stack.spawn(same_at_every_level).unwrap().join().unwrap();
+    big_stack
+        .spawn(same_at_every_level)
+        .unwrap()
+        .join()
+        .unwrap();
 }
 
 fn same_at_every_level() {
